@@ -1,0 +1,86 @@
+// Point-cloud, label, mesh and pose I/O. Readers validate everything and throw quadrix::Error
+// naming the file and what was wrong; non-finite points are dropped and counted. Writers write a
+// temporary file beside the target and rename it, so a failed write never leaves a half file.
+#pragma once
+
+#include "geometry/mesh.h"
+#include "geometry/point_cloud.h"
+
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace quadrix {
+
+/// Point-cloud file formats. `Auto` chooses by extension.
+enum class CloudFormat {
+  Auto,         ///< by extension: .bin, .pcd.bin, .ply, .pcd, .xyz/.txt, .csv, .npy
+  KittiBin,     ///< float32 x, y, z, intensity (16 bytes a point)
+  NuScenesBin,  ///< float32 x, y, z, intensity, ring (20 bytes a point)
+  Ply,          ///< ascii, binary_little_endian, binary_big_endian
+  Pcd,          ///< ascii, binary, binary_compressed
+  Xyz,          ///< whitespace-separated x y z [more columns], '#' comments
+  Csv,          ///< comma-separated, optional header row naming x,y,z
+  Npy,          ///< NumPy N x 3+ float32/float64, C or Fortran order
+};
+
+/// Name of a format ("kitti-bin", "ply", ...), as accepted by --format.
+std::string cloud_format_name(CloudFormat format);
+/// Parses --format values (auto, bin, kitti-bin, nuscenes-bin, ply, pcd, xyz, csv, npy); throws Error otherwise.
+CloudFormat cloud_format_from_name(const std::string& name);
+/// The format `path` would be read or written with under `Auto`; throws Error for unknown extensions.
+CloudFormat cloud_format_from_path(const std::string& path);
+
+/// What a reader found, for `quadrix info` and diagnostics.
+struct CloudReadReport {
+  CloudFormat format = CloudFormat::Auto;   ///< the format actually read
+  std::string encoding;                     ///< e.g. "binary_little_endian", "binary_compressed", "ascii"
+  std::size_t points_in_file = 0;           ///< records in the file, finite or not
+  std::size_t non_finite_dropped = 0;       ///< points dropped because a coordinate was NaN/inf
+  std::vector<std::string> fields;          ///< per-point fields in file order
+};
+
+/// Options of read_point_cloud.
+struct CloudReadOptions {
+  CloudFormat format = CloudFormat::Auto;   ///< override the extension
+  bool keep_extra_fields = true;            ///< keep scalar fields other than x,y,z,intensity,label,rgb
+};
+
+/// Reads a point cloud; throws quadrix::Error naming the file (and line or field) on bad input.
+PointCloud read_point_cloud(const std::string& path, const CloudReadOptions& options = {},
+                            CloudReadReport* report = nullptr);
+
+/// Options of write_point_cloud.
+struct CloudWriteOptions {
+  CloudFormat format = CloudFormat::Auto;   ///< Ply or Pcd (others are read-only); Auto = by extension
+  bool binary = true;                       ///< binary_little_endian PLY / binary PCD, else ascii
+};
+
+/// Writes positions and every present field (intensity, labels, colours, extra fields) atomically.
+void write_point_cloud(const std::string& path, const PointCloud& cloud, const CloudWriteOptions& options = {});
+
+/// Reads a SemanticKITTI .label file (uint32 per point, lower 16 bits = semantic class, upper = instance).
+/// Throws Error when its size is not 4 * expected_points (pass 0 to skip the count check).
+std::vector<std::uint32_t> read_semantic_kitti_labels(const std::string& path, std::size_t expected_points = 0);
+
+/// Writes a triangle mesh as binary PLY (with vertex colours when present), atomically.
+void write_mesh_ply(const std::string& path, const TriangleMesh& mesh);
+
+/// Reads a 4x4 row-major text matrix (16 numbers, or 12 for the top 3 rows); Error names file and line.
+Eigen::Isometry3d read_pose_matrix(const std::string& path);
+/// Writes a 4x4 row-major text matrix with full precision, atomically.
+void write_pose_matrix(const std::string& path, const Eigen::Isometry3d& pose);
+/// Reads KITTI pose lines (12 numbers a line, row-major 3x4).
+std::vector<Eigen::Isometry3d> read_kitti_poses(const std::string& path);
+/// Reads the velodyne->camera transform `Tr` (key "Tr:" or "Tr_velo_to_cam:") of a KITTI calibration file.
+Eigen::Isometry3d read_kitti_calibration(const std::string& path);
+
+/// Writes a file through `write` into a temporary file beside `path`, then renames it over `path`.
+/// On any exception the temporary is removed and the original file is untouched.
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
+
+}  // namespace quadrix
