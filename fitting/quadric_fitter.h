@@ -1,0 +1,80 @@
+// QuadricFitter: one interface for every way of fitting a quadric to an element's points
+// (paper §"Quadric Fitting"), with a registry by name so experiments can compare them.
+#pragma once
+
+#include "geometry/quadric.h"
+#include "geometry/quadric_record.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace quadrix {
+
+/// Outcome of a fit.
+enum class FitStatus {
+  Ok,            ///< a quadric of the returned type was fitted
+  TooFewPoints,  ///< fewer points than the type needs (see minimum_points_for_type)
+  Degenerate,    ///< the points do not determine the requested shape (e.g. collinear points for a plane)
+  TypeMismatch,  ///< an unconstrained fitter found a different type than the hint asked for
+  NotConverged,  ///< an iterative fitter stopped before its tolerance
+  Failed,        ///< numerical failure (non-finite result)
+};
+
+/// Lower-case name of a status ("ok", "too_few_points", ...), stable for JSON.
+std::string fit_status_name(FitStatus status);
+
+/// The types a fit can be asked for. `std::nullopt` (auto) lets the fitter choose.
+using FitTypeHint = std::optional<QuadricType>;
+
+/// Parses the --type option: auto, point, line, plane, sphere, ellipsoid, cylinder (circular),
+/// elliptic_cylinder, cone (circular), elliptic_cone; throws quadrix::Error otherwise.
+FitTypeHint fit_type_hint_from_name(const std::string& name);
+
+/// Minimum number of points a type needs to be fitted (point 1, line 2, plane 3, sphere 4, others 9).
+std::size_t minimum_points_for_type(QuadricType type);
+
+/// Everything a fitter returns.
+struct QuadricFit {
+  FitStatus status = FitStatus::Failed;             ///< outcome
+  QuadricType type = QuadricType::Invalid;          ///< type of the fitted quadric
+  Quadric quadric;                                  ///< Q (not normalised; decompose() normalises)
+  QuadricDecomposition shape;                       ///< decomposition of Q: scale, rotation, centre, indicators
+  StatisticalPose statistics;                       ///< t_s, R_s, s_s of the points (paper's statistical fit)
+  double residual_rms = 0.0;                        ///< RMS orthogonal point-to-surface distance, metres
+  double residual_max = 0.0;                        ///< largest orthogonal distance, metres
+  double algebraic_distance = 0.0;                  ///< f_p2s of paper Eq. (f_p2s) in unit space (see unit_space_algebraic_distance)
+  double time_ms = 0.0;                             ///< wall time of the fit
+  std::string message;                              ///< human-readable detail for non-ok statuses
+};
+
+/// A way of fitting quadrics. Implementations are stateless and thread-safe.
+class QuadricFitter {
+ public:
+  virtual ~QuadricFitter() = default;
+  /// Registry name ("statistical", "taubin", ...).
+  virtual std::string name() const = 0;
+  /// Fits `points` (3 x N, metres; `normals` 3 x N unit vectors or empty) with an optional type hint.
+  virtual QuadricFit fit(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, FitTypeHint type) const = 0;
+};
+
+/// Creates a fitter by registry name; throws quadrix::Error listing the valid names otherwise.
+std::unique_ptr<QuadricFitter> make_quadric_fitter(const std::string& name);
+/// Names of every registered fitter.
+std::vector<std::string> quadric_fitter_names();
+
+/// f_p2s of paper Eq. (f_p2s): points and Q mapped to unit space (centred on the points' mean,
+/// scaled so the RMS radius is 1), then the mean first-order distance |f(x)| / ||grad f(x)||
+/// (the paper's |x^T Q x| / |grad(Q) x| read with a norm in the denominator, after Taubin 1991).
+double unit_space_algebraic_distance(const Eigen::Matrix3Xd& points, const Quadric& quadric);
+
+/// Fills shape (decomposed with `tolerances`), type, residual_rms / residual_max (orthogonal
+/// distances) and algebraic_distance of `fit` from its quadric and the points, so every fitter
+/// reports the same numbers (statistics are the fitter's to fill).
+void evaluate_fit(const Eigen::Matrix3Xd& points, QuadricFit& fit, const DecompositionTolerances& tolerances = {});
+
+}  // namespace quadrix
