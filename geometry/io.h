@@ -3,12 +3,14 @@
 // temporary file beside the target and rename it, so a failed write never leaves a half file.
 #pragma once
 
+#include "geometry/error.h"
 #include "geometry/mesh.h"
 #include "geometry/point_cloud.h"
 
 #include <Eigen/Geometry>
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <iosfwd>
 #include <string>
@@ -48,9 +50,18 @@ struct CloudReadReport {
 struct CloudReadOptions {
   CloudFormat format = CloudFormat::Auto;   ///< override the extension
   bool keep_extra_fields = true;            ///< keep scalar fields other than x,y,z,intensity,label,rgb
+  bool reject_non_finite = false;           ///< throw Error at the first NaN/inf coordinate instead of dropping it
 };
 
 /// Reads a point cloud; throws quadrix::Error naming the file (and line or field) on bad input.
+/// Field roles by (case-insensitive) name: x, y, z (required); intensity, scalar_intensity, reflectance,
+/// scalar_reflectance, remission -> intensity; label, scalar_label, semantic_label -> labels (integers
+/// 0..2^32-1, else Error); red/green/blue (or r/g/b, diffuse_red/...) and PCD packed rgb/rgba -> colors
+/// (integer types clamped to 0..255; floating types scaled by 255 when every value is <= 1, else clamped);
+/// every other field -> extra_fields (when keep_extra_fields). Files without names (KITTI/nuScenes .bin,
+/// XYZ, headerless CSV, .npy) name their columns: 3 -> x y z; 4 -> x y z intensity; 6 -> x y z red green
+/// blue; any other count -> x y z column_4 column_5 ... (1-based). A point whose x, y or z is NaN/inf
+/// (or overflows float) is dropped and counted in report->non_finite_dropped.
 PointCloud read_point_cloud(const std::string& path, const CloudReadOptions& options = {},
                             CloudReadReport* report = nullptr);
 
@@ -67,10 +78,17 @@ void write_point_cloud(const std::string& path, const PointCloud& cloud, const C
 /// Throws Error when its size is not 4 * expected_points (pass 0 to skip the count check).
 std::vector<std::uint32_t> read_semantic_kitti_labels(const std::string& path, std::size_t expected_points = 0);
 
-/// Writes a triangle mesh as binary PLY (with vertex colours when present), atomically.
+/// Writes a triangle mesh as binary PLY (double x,y,z; uchar colours when present; int indices), atomically.
 void write_mesh_ply(const std::string& path, const TriangleMesh& mesh);
+/// Reads the vertices (and colours) and triangles of a PLY mesh; polygons with more than 3 corners are fanned.
+TriangleMesh read_mesh_ply(const std::string& path);
 
-/// Reads a 4x4 row-major text matrix (16 numbers, or 12 for the top 3 rows); Error names file and line.
+/// Largest max|R^T R - I| a pose file may have before its rotation is rejected (covers 6-digit text).
+constexpr double kPoseOrthonormalityTolerance = 1e-3;
+
+/// Reads a 4x4 row-major text matrix (16 numbers, or 12 for the top 3 rows; '#' comments allowed), or a
+/// .npy 4x4/3x4 array. Error names file and line; Error when the bottom row is not 0 0 0 1 or the rotation
+/// is not orthonormal within kPoseOrthonormalityTolerance or has determinant < 0. Values are kept as written.
 Eigen::Isometry3d read_pose_matrix(const std::string& path);
 /// Writes a 4x4 row-major text matrix with full precision, atomically.
 void write_pose_matrix(const std::string& path, const Eigen::Isometry3d& pose);
@@ -78,6 +96,9 @@ void write_pose_matrix(const std::string& path, const Eigen::Isometry3d& pose);
 std::vector<Eigen::Isometry3d> read_kitti_poses(const std::string& path);
 /// Reads the velodyne->camera transform `Tr` (key "Tr:" or "Tr_velo_to_cam:") of a KITTI calibration file.
 Eigen::Isometry3d read_kitti_calibration(const std::string& path);
+/// As above, but also accepts per-sequence lines "seqA-B <12 numbers>" / "seqA <12 numbers>" (the format of
+/// shared/data/kitti_poses/calib_Tr_velo_to_cam.txt) and picks the one covering `sequence`.
+Eigen::Isometry3d read_kitti_calibration(const std::string& path, int sequence);
 
 /// Writes a file through `write` into a temporary file beside `path`, then renames it over `path`.
 /// On any exception the temporary is removed and the original file is untouched.

@@ -1,0 +1,468 @@
+// Format selection, the shared column -> PointCloud assembly, atomic writing and text helpers.
+#include "geometry/io.h"
+#include "geometry/io_internal.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace quadrix {
+namespace io_internal {
+
+namespace {
+
+std::string lowercase(std::string_view text) {
+  std::string result(text);
+  for (char& c : result) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return result;
+}
+
+bool ends_with(const std::string& text, const std::string& suffix) {
+  return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+template <typename T>
+T load_value(const char* source, bool swap_bytes) {
+  T value;
+  if (!swap_bytes) {
+    std::memcpy(&value, source, sizeof(T));
+  } else {
+    char reversed[sizeof(T)];
+    for (std::size_t i = 0; i < sizeof(T); ++i) reversed[i] = source[sizeof(T) - 1 - i];
+    std::memcpy(&value, reversed, sizeof(T));
+  }
+  return value;
+}
+
+template <typename T>
+void decode_typed(const char* source, std::size_t stride, std::size_t count, bool swap_bytes, double* destination) {
+  if (swap_bytes) {
+    for (std::size_t i = 0; i < count; ++i) destination[i] = static_cast<double>(load_value<T>(source + i * stride, true));
+  } else {
+    for (std::size_t i = 0; i < count; ++i) {
+      T value;
+      std::memcpy(&value, source + i * stride, sizeof(T));
+      destination[i] = static_cast<double>(value);
+    }
+  }
+}
+
+enum class Role { X, Y, Z, Intensity, Label, Red, Green, Blue, Extra };
+
+Role role_of(const std::string& name) {
+  const std::string lower = lowercase(name);
+  if (lower == "x") return Role::X;
+  if (lower == "y") return Role::Y;
+  if (lower == "z") return Role::Z;
+  if (lower == "intensity" || lower == "scalar_intensity" || lower == "reflectance" ||
+      lower == "scalar_reflectance" || lower == "remission" || lower == "scalar_remission")
+    return Role::Intensity;
+  if (lower == "label" || lower == "scalar_label" || lower == "semantic_label") return Role::Label;
+  if (lower == "red" || lower == "r" || lower == "diffuse_red") return Role::Red;
+  if (lower == "green" || lower == "g" || lower == "diffuse_green") return Role::Green;
+  if (lower == "blue" || lower == "b" || lower == "diffuse_blue") return Role::Blue;
+  return Role::Extra;
+}
+
+std::uint8_t to_color_channel(double value, bool scale_unit_range) {
+  if (!std::isfinite(value)) return 0;
+  const double scaled = scale_unit_range ? value * 255.0 : value;
+  return static_cast<std::uint8_t>(std::lround(std::clamp(scaled, 0.0, 255.0)));
+}
+
+}  // namespace
+
+FileBytes read_file_bytes(const std::string& path) {
+  std::error_code code;
+  if (std::filesystem::is_directory(path, code)) throw file_error(path, "is a directory, expected a file");
+  const int descriptor = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (descriptor < 0) throw file_error(path, std::string("cannot open: ") + std::strerror(errno));
+  const off_t end = ::lseek(descriptor, 0, SEEK_END);
+  if (end < 0 || ::lseek(descriptor, 0, SEEK_SET) < 0) {
+    ::close(descriptor);
+    throw file_error(path, "cannot determine the file size (not a regular file?)");
+  }
+  FileBytes bytes;
+  bytes.size = static_cast<std::size_t>(end);
+  bytes.data.reset(new char[bytes.size > 0 ? bytes.size : 1]);
+  std::size_t done = 0;
+  while (done < bytes.size) {
+    const ssize_t got = ::read(descriptor, bytes.data.get() + done, bytes.size - done);
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) {
+      const std::string reason = got < 0 ? std::strerror(errno) : "file shrank while reading";
+      ::close(descriptor);
+      throw file_error(path, "read failed after " + std::to_string(done) + " bytes: " + reason);
+    }
+    done += static_cast<std::size_t>(got);
+  }
+  ::close(descriptor);
+  return bytes;
+}
+
+std::size_t scalar_size(ScalarType type) {
+  switch (type) {
+    case ScalarType::Int8:
+    case ScalarType::UInt8: return 1;
+    case ScalarType::Int16:
+    case ScalarType::UInt16: return 2;
+    case ScalarType::Int32:
+    case ScalarType::UInt32:
+    case ScalarType::Float32: return 4;
+    case ScalarType::Int64:
+    case ScalarType::UInt64:
+    case ScalarType::Float64: return 8;
+  }
+  return 0;
+}
+
+bool scalar_is_floating(ScalarType type) { return type == ScalarType::Float32 || type == ScalarType::Float64; }
+
+void decode_strided(const char* source, std::size_t stride, std::size_t count, ScalarType type, bool swap_bytes,
+                    double* destination) {
+  switch (type) {
+    case ScalarType::Int8: return decode_typed<std::int8_t>(source, stride, count, false, destination);
+    case ScalarType::UInt8: return decode_typed<std::uint8_t>(source, stride, count, false, destination);
+    case ScalarType::Int16: return decode_typed<std::int16_t>(source, stride, count, swap_bytes, destination);
+    case ScalarType::UInt16: return decode_typed<std::uint16_t>(source, stride, count, swap_bytes, destination);
+    case ScalarType::Int32: return decode_typed<std::int32_t>(source, stride, count, swap_bytes, destination);
+    case ScalarType::UInt32: return decode_typed<std::uint32_t>(source, stride, count, swap_bytes, destination);
+    case ScalarType::Int64: return decode_typed<std::int64_t>(source, stride, count, swap_bytes, destination);
+    case ScalarType::UInt64: return decode_typed<std::uint64_t>(source, stride, count, swap_bytes, destination);
+    case ScalarType::Float32: return decode_typed<float>(source, stride, count, swap_bytes, destination);
+    case ScalarType::Float64: return decode_typed<double>(source, stride, count, swap_bytes, destination);
+  }
+}
+
+void throw_non_finite(const std::string& path, std::size_t point_index, const char* field) {
+  throw file_error(path, "point " + std::to_string(point_index) + " has a non-finite " + field +
+                             " coordinate (NaN or inf) and reject_non_finite is set");
+}
+
+PointCloud assemble_cloud(const std::string& path, std::vector<FieldColumn>& columns, std::size_t rows,
+                          const CloudReadOptions& options, CloudReadReport& report) {
+  const FieldColumn* role_column[8] = {};
+  std::vector<const FieldColumn*> extras;
+  for (const FieldColumn& column : columns) {
+    if (column.values.size() != rows)
+      throw Error("internal: column '" + column.name + "' of " + path + " has " + std::to_string(column.values.size()) +
+                  " values for " + std::to_string(rows) + " records");
+    const Role role = role_of(column.name);
+    const int slot = static_cast<int>(role);
+    if (role != Role::Extra && role_column[slot] == nullptr) {
+      role_column[slot] = &column;
+    } else {
+      extras.push_back(&column);
+    }
+  }
+  const char* axis_names[3] = {"x", "y", "z"};
+  for (int axis = 0; axis < 3; ++axis) {
+    if (role_column[axis] == nullptr) {
+      std::string present;
+      for (const FieldColumn& column : columns) present += (present.empty() ? "" : " ") + column.name;
+      throw file_error(path, std::string("no '") + axis_names[axis] + "' field (fields: " +
+                                 (present.empty() ? "none" : present) + "); x, y and z are required");
+    }
+  }
+  // Colours need all three channels; otherwise the channels present are ordinary extra fields.
+  const bool has_colors = role_column[static_cast<int>(Role::Red)] && role_column[static_cast<int>(Role::Green)] &&
+                          role_column[static_cast<int>(Role::Blue)];
+  if (!has_colors) {
+    for (Role role : {Role::Red, Role::Green, Role::Blue}) {
+      if (role_column[static_cast<int>(role)]) extras.push_back(role_column[static_cast<int>(role)]);
+      role_column[static_cast<int>(role)] = nullptr;
+    }
+  }
+
+  const double* x = role_column[0]->values.data();
+  const double* y = role_column[1]->values.data();
+  const double* z = role_column[2]->values.data();
+  std::vector<std::size_t> kept;
+  kept.reserve(rows);
+  PointCloud cloud;
+  cloud.positions.resize(3, static_cast<Eigen::Index>(rows));
+  float* out = cloud.positions.data();
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < rows; ++i) {
+    const float px = static_cast<float>(x[i]), py = static_cast<float>(y[i]), pz = static_cast<float>(z[i]);
+    if (std::isfinite(px) && std::isfinite(py) && std::isfinite(pz)) {
+      out[3 * count] = px;
+      out[3 * count + 1] = py;
+      out[3 * count + 2] = pz;
+      ++count;
+      kept.push_back(i);
+    } else if (options.reject_non_finite) {
+      throw_non_finite(path, i, !std::isfinite(px) ? "x" : !std::isfinite(py) ? "y" : "z");
+    }
+  }
+  if (count != rows) cloud.positions.conservativeResize(3, static_cast<Eigen::Index>(count));
+  report.points_in_file = rows;
+  report.non_finite_dropped = rows - count;
+
+  if (const FieldColumn* column = role_column[static_cast<int>(Role::Intensity)]) {
+    cloud.intensity.resize(count);
+    for (std::size_t k = 0; k < count; ++k) cloud.intensity[k] = static_cast<float>(column->values[kept[k]]);
+  }
+  if (const FieldColumn* column = role_column[static_cast<int>(Role::Label)]) {
+    cloud.labels.resize(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      const double value = column->values[kept[k]];
+      if (!(value >= 0.0 && value <= 4294967295.0 && value == std::floor(value)))
+        throw file_error(path, "field '" + column->name + "' of point " + std::to_string(kept[k]) + " is " +
+                                   std::to_string(value) + "; labels must be integers in 0..4294967295");
+      cloud.labels[k] = static_cast<std::uint32_t>(value);
+    }
+  }
+  if (has_colors) {
+    const FieldColumn* channels[3] = {role_column[static_cast<int>(Role::Red)],
+                                      role_column[static_cast<int>(Role::Green)],
+                                      role_column[static_cast<int>(Role::Blue)]};
+    bool scale[3];
+    for (int c = 0; c < 3; ++c) {
+      scale[c] = false;
+      if (channels[c]->floating_point) {
+        scale[c] = true;
+        for (std::size_t k = 0; k < count && scale[c]; ++k)
+          if (channels[c]->values[kept[k]] > 1.0) scale[c] = false;
+      }
+    }
+    const bool scale_all = scale[0] && scale[1] && scale[2];
+    cloud.colors.resize(count);
+    for (std::size_t k = 0; k < count; ++k)
+      for (int c = 0; c < 3; ++c) cloud.colors[k][c] = to_color_channel(channels[c]->values[kept[k]], scale_all);
+  }
+  if (options.keep_extra_fields) {
+    for (const FieldColumn* column : extras) {
+      std::vector<float>& values = cloud.extra_fields[column->name];
+      values.resize(count);
+      for (std::size_t k = 0; k < count; ++k) values[k] = static_cast<float>(column->values[kept[k]]);
+    }
+  }
+  return cloud;
+}
+
+std::vector<std::string> headerless_column_names(std::size_t column_count) {
+  std::vector<std::string> names = {"x", "y", "z"};
+  if (column_count == 4) {
+    names.push_back("intensity");
+  } else if (column_count == 6) {
+    names.insert(names.end(), {"red", "green", "blue"});
+  } else {
+    for (std::size_t c = 4; c <= column_count; ++c) names.push_back("column_" + std::to_string(c));
+  }
+  names.resize(column_count);
+  return names;
+}
+
+bool parse_double(std::string_view token, double& value) {
+  if (token.empty()) return false;
+  const char* begin = token.data();
+  const char* end = begin + token.size();
+  if (*begin == '+') ++begin;
+  if (begin == end) return false;
+  const auto result = std::from_chars(begin, end, value);
+  if (result.ptr != end) return false;
+  if (result.ec == std::errc::result_out_of_range) {
+    // Overflow is inf (dropped later as non-finite); underflow is a tiny number, i.e. zero or subnormal.
+    value = std::strtod(std::string(begin, end).c_str(), nullptr);
+    return true;
+  }
+  return result.ec == std::errc();
+}
+
+bool parse_size(std::string_view token, std::size_t& value) {
+  if (token.empty()) return false;
+  const auto result = std::from_chars(token.data(), token.data() + token.size(), value);
+  return result.ec == std::errc() && result.ptr == token.data() + token.size();
+}
+
+void split_tokens(std::string_view line, std::vector<std::string_view>& tokens, char extra_separator) {
+  tokens.clear();
+  std::size_t i = 0;
+  const std::size_t n = line.size();
+  auto is_separator = [extra_separator](char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f' || (extra_separator != 0 && c == extra_separator);
+  };
+  while (i < n) {
+    while (i < n && is_separator(line[i])) ++i;
+    if (i >= n) break;
+    const std::size_t start = i;
+    while (i < n && !is_separator(line[i])) ++i;
+    tokens.push_back(line.substr(start, i - start));
+  }
+}
+
+bool LineReader::next(std::string_view& line) {
+  if (position_ >= text_.size()) return false;
+  const std::size_t end = text_.find('\n', position_);
+  const std::size_t stop = end == std::string_view::npos ? text_.size() : end;
+  line = text_.substr(position_, stop - position_);
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  position_ = end == std::string_view::npos ? text_.size() : end + 1;
+  ++next_line_number_;
+  return true;
+}
+
+void append_number(std::string& out, float value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, result.ptr);
+}
+
+void append_number(std::string& out, double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, result.ptr);
+}
+
+void append_number(std::string& out, std::uint64_t value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  out.append(buffer, result.ptr);
+}
+
+void check_cloud_consistent(const std::string& path, const PointCloud& cloud) {
+  const std::size_t n = cloud.size();
+  auto check = [&](const std::string& field, std::size_t size) {
+    if (size != 0 && size != n)
+      throw file_error(path, "cannot write: cloud field '" + field + "' has " + std::to_string(size) +
+                                 " values for " + std::to_string(n) + " points");
+  };
+  check("intensity", cloud.intensity.size());
+  check("labels", cloud.labels.size());
+  check("colors", cloud.colors.size());
+  for (const auto& [name, values] : cloud.extra_fields) {
+    check(name, values.size());
+    check_extra_field_name(path, name);
+  }
+}
+
+void check_extra_field_name(const std::string& path, const std::string& name) {
+  if (name.empty()) throw file_error(path, "cannot write: an extra field has an empty name");
+  for (char c : name)
+    if (std::isspace(static_cast<unsigned char>(c)) || !std::isprint(static_cast<unsigned char>(c)))
+      throw file_error(path, "cannot write: extra field name '" + name + "' contains whitespace or control characters");
+  if (role_of(name) != Role::Extra || lowercase(name) == "rgb" || lowercase(name) == "rgba")
+    throw file_error(path, "cannot write: extra field name '" + name +
+                               "' would be read back as x/y/z/intensity/label/colour; rename it");
+}
+
+}  // namespace io_internal
+
+std::string cloud_format_name(CloudFormat format) {
+  switch (format) {
+    case CloudFormat::Auto: return "auto";
+    case CloudFormat::KittiBin: return "kitti-bin";
+    case CloudFormat::NuScenesBin: return "nuscenes-bin";
+    case CloudFormat::Ply: return "ply";
+    case CloudFormat::Pcd: return "pcd";
+    case CloudFormat::Xyz: return "xyz";
+    case CloudFormat::Csv: return "csv";
+    case CloudFormat::Npy: return "npy";
+  }
+  return "unknown";
+}
+
+CloudFormat cloud_format_from_name(const std::string& name) {
+  const std::string lower = io_internal::lowercase(name);
+  if (lower == "auto") return CloudFormat::Auto;
+  if (lower == "bin" || lower == "kitti-bin" || lower == "kitti") return CloudFormat::KittiBin;
+  if (lower == "nuscenes-bin" || lower == "nuscenes" || lower == "pcd.bin") return CloudFormat::NuScenesBin;
+  if (lower == "ply") return CloudFormat::Ply;
+  if (lower == "pcd") return CloudFormat::Pcd;
+  if (lower == "xyz" || lower == "txt") return CloudFormat::Xyz;
+  if (lower == "csv") return CloudFormat::Csv;
+  if (lower == "npy") return CloudFormat::Npy;
+  throw Error("unknown point-cloud format '" + name +
+              "' (expected one of: auto, bin, kitti-bin, nuscenes-bin, ply, pcd, xyz, txt, csv, npy)");
+}
+
+CloudFormat cloud_format_from_path(const std::string& path) {
+  const std::string lower = io_internal::lowercase(std::filesystem::path(path).filename().string());
+  using io_internal::ends_with;
+  if (ends_with(lower, ".pcd.bin")) return CloudFormat::NuScenesBin;
+  if (ends_with(lower, ".bin")) return CloudFormat::KittiBin;
+  if (ends_with(lower, ".ply")) return CloudFormat::Ply;
+  if (ends_with(lower, ".pcd")) return CloudFormat::Pcd;
+  if (ends_with(lower, ".xyz") || ends_with(lower, ".txt")) return CloudFormat::Xyz;
+  if (ends_with(lower, ".csv")) return CloudFormat::Csv;
+  if (ends_with(lower, ".npy")) return CloudFormat::Npy;
+  throw file_error(path,
+                   "unknown point-cloud extension (expected .bin, .pcd.bin, .ply, .pcd, .xyz, .txt, .csv or .npy; "
+                   "or choose the format explicitly, e.g. --format ply)");
+}
+
+PointCloud read_point_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport* report) {
+  CloudReadReport local;
+  CloudReadReport& out = report ? *report : local;
+  out = CloudReadReport{};
+  const CloudFormat format = options.format == CloudFormat::Auto ? cloud_format_from_path(path) : options.format;
+  out.format = format;
+  switch (format) {
+    case CloudFormat::KittiBin: return io_internal::read_kitti_bin(path, options, out);
+    case CloudFormat::NuScenesBin: return io_internal::read_nuscenes_bin(path, options, out);
+    case CloudFormat::Ply: return io_internal::read_ply_cloud(path, options, out);
+    case CloudFormat::Pcd: return io_internal::read_pcd_cloud(path, options, out);
+    case CloudFormat::Xyz: return io_internal::read_xyz_cloud(path, options, out);
+    case CloudFormat::Csv: return io_internal::read_csv_cloud(path, options, out);
+    case CloudFormat::Npy: return io_internal::read_npy_cloud(path, options, out);
+    case CloudFormat::Auto: break;
+  }
+  throw file_error(path, "no reader for the requested format");
+}
+
+void write_point_cloud(const std::string& path, const PointCloud& cloud, const CloudWriteOptions& options) {
+  const CloudFormat format = options.format == CloudFormat::Auto ? cloud_format_from_path(path) : options.format;
+  io_internal::check_cloud_consistent(path, cloud);
+  if (format == CloudFormat::Ply) return io_internal::write_ply_cloud(path, cloud, options.binary);
+  if (format == CloudFormat::Pcd) return io_internal::write_pcd_cloud(path, cloud, options.binary);
+  throw file_error(path, "writing format '" + cloud_format_name(format) + "' is not supported; write .ply or .pcd");
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  static std::atomic<unsigned> counter{0};
+  const std::filesystem::path target(path);
+  const std::filesystem::path directory = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+  std::error_code code;
+  if (!std::filesystem::is_directory(directory, code))
+    throw file_error(path, "cannot write: directory '" + directory.string() + "' does not exist");
+  if (std::filesystem::is_directory(target, code)) throw file_error(path, "cannot write: it is a directory");
+  const std::string temporary = (directory / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()) +
+                                              "-" + std::to_string(counter.fetch_add(1))))
+                                    .string();
+  try {
+    {
+      std::ofstream stream(temporary, std::ios::binary | std::ios::trunc);
+      if (!stream) throw file_error(path, "cannot create temporary file '" + temporary + "': " + std::strerror(errno));
+      write(stream);
+      stream.flush();
+      if (!stream) throw file_error(path, "writing failed (disk full or I/O error)");
+      stream.close();
+      if (stream.fail()) throw file_error(path, "closing the temporary file failed");
+    }
+    const int descriptor = ::open(temporary.c_str(), O_RDONLY | O_CLOEXEC);
+    if (descriptor >= 0) {
+      const int synced = ::fsync(descriptor);
+      ::close(descriptor);
+      if (synced != 0) throw file_error(path, std::string("fsync failed: ") + std::strerror(errno));
+    }
+    if (std::rename(temporary.c_str(), path.c_str()) != 0)
+      throw file_error(path, std::string("cannot rename the temporary file over the target: ") + std::strerror(errno));
+  } catch (...) {
+    std::remove(temporary.c_str());
+    throw;
+  }
+}
+
+}  // namespace quadrix

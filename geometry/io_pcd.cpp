@@ -1,0 +1,360 @@
+// PCD v0.5-0.7: ascii, binary and binary_compressed (PCL's LZF decompressor) reading; ascii and binary
+// writing. Packed rgb/rgba fields become colours; "_" padding fields are skipped; COUNT > 1 fields become
+// name_0, name_1, ... extra fields.
+#include "geometry/io.h"
+#include "geometry/io_internal.h"
+
+#include <pcl/io/lzf.h>
+
+#include <cstring>
+#include <limits>
+#include <ostream>
+
+namespace quadrix {
+namespace io_internal {
+
+namespace {
+
+struct PcdField {
+  std::string name;
+  std::size_t size = 4;
+  char type = 'F';
+  std::size_t count = 1;
+  ScalarType scalar = ScalarType::Float32;
+  std::size_t offset = 0;  // byte offset inside a binary point record
+};
+
+struct PcdHeader {
+  std::vector<PcdField> fields;
+  std::size_t width = 0, height = 0, points = 0;
+  bool have_points = false;
+  std::string data;            // ascii | binary | binary_compressed
+  std::size_t body_offset = 0;
+  std::size_t body_first_line = 0;
+  std::size_t point_stride = 0;
+};
+
+bool is_packed_color(const PcdField& field) {
+  return (field.name == "rgb" || field.name == "rgba") && field.size == 4 && field.count == 1;
+}
+
+PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
+  PcdHeader header;
+  LineReader lines(text);
+  std::string_view line;
+  std::vector<std::string_view> tokens;
+  std::vector<std::string_view> sizes, types, counts;
+  std::vector<std::string> size_text, type_text, count_text;
+  bool have_fields = false, have_width = false, have_height = false, any_key = false;
+  while (true) {
+    if (!lines.next(line)) {
+      if (!any_key) throw file_error(path, "bad magic: not a PCD file (no FIELDS/DATA header)");
+      throw file_error(path, "PCD header has no DATA line (truncated header)");
+    }
+    const std::string where = "header line " + std::to_string(lines.line_number()) + ": ";
+    split_tokens(line, tokens);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    const std::string key(tokens[0]);
+    auto single_size = [&](std::size_t& value) {
+      if (tokens.size() != 2 || !parse_size(tokens[1], value))
+        throw file_error(path, where + key + " expects one non-negative integer, got '" + std::string(line) + "'");
+    };
+    if (key == "VERSION") {
+      any_key = true;
+    } else if (key == "FIELDS" || key == "COLUMNS") {
+      any_key = have_fields = true;
+      for (std::size_t k = 1; k < tokens.size(); ++k) {
+        PcdField field;
+        field.name = std::string(tokens[k]);
+        header.fields.push_back(field);
+      }
+    } else if (key == "SIZE") {
+      for (std::size_t k = 1; k < tokens.size(); ++k) size_text.emplace_back(tokens[k]);
+    } else if (key == "TYPE") {
+      for (std::size_t k = 1; k < tokens.size(); ++k) type_text.emplace_back(tokens[k]);
+    } else if (key == "COUNT") {
+      for (std::size_t k = 1; k < tokens.size(); ++k) count_text.emplace_back(tokens[k]);
+    } else if (key == "WIDTH") {
+      single_size(header.width);
+      have_width = true;
+    } else if (key == "HEIGHT") {
+      single_size(header.height);
+      have_height = true;
+    } else if (key == "POINTS") {
+      single_size(header.points);
+      header.have_points = true;
+    } else if (key == "VIEWPOINT") {
+      if (tokens.size() != 8) throw file_error(path, where + "VIEWPOINT expects 7 numbers");
+    } else if (key == "DATA") {
+      if (tokens.size() != 2 || (tokens[1] != "ascii" && tokens[1] != "binary" && tokens[1] != "binary_compressed"))
+        throw file_error(path, where + "DATA must be ascii, binary or binary_compressed, got '" + std::string(line) + "'");
+      header.data = std::string(tokens[1]);
+      break;
+    } else {
+      throw file_error(path, where + "unknown PCD header key '" + key + "'");
+    }
+  }
+  if (!have_fields || header.fields.empty()) throw file_error(path, "PCD header has no FIELDS line");
+  const std::size_t n = header.fields.size();
+  if (size_text.size() != n)
+    throw file_error(path, "PCD header: SIZE has " + std::to_string(size_text.size()) + " entries for " +
+                               std::to_string(n) + " FIELDS");
+  if (type_text.size() != n)
+    throw file_error(path, "PCD header: TYPE has " + std::to_string(type_text.size()) + " entries for " +
+                               std::to_string(n) + " FIELDS");
+  if (!count_text.empty() && count_text.size() != n)
+    throw file_error(path, "PCD header: COUNT has " + std::to_string(count_text.size()) + " entries for " +
+                               std::to_string(n) + " FIELDS");
+  std::size_t offset = 0;
+  for (std::size_t f = 0; f < n; ++f) {
+    PcdField& field = header.fields[f];
+    if (!parse_size(size_text[f], field.size))
+      throw file_error(path, "PCD header: SIZE of field '" + field.name + "' is '" + size_text[f] + "'");
+    if (type_text[f].size() != 1)
+      throw file_error(path, "PCD header: TYPE of field '" + field.name + "' is '" + type_text[f] + "' (expected I, U or F)");
+    field.type = type_text[f][0];
+    if (!count_text.empty() && (!parse_size(count_text[f], field.count) || field.count == 0))
+      throw file_error(path, "PCD header: COUNT of field '" + field.name + "' is '" + count_text[f] +
+                                 "' (expected a positive integer)");
+    const std::string kind = std::string(1, field.type) + std::to_string(field.size);
+    if (kind == "I1") field.scalar = ScalarType::Int8;
+    else if (kind == "U1") field.scalar = ScalarType::UInt8;
+    else if (kind == "I2") field.scalar = ScalarType::Int16;
+    else if (kind == "U2") field.scalar = ScalarType::UInt16;
+    else if (kind == "I4") field.scalar = ScalarType::Int32;
+    else if (kind == "U4") field.scalar = ScalarType::UInt32;
+    else if (kind == "I8") field.scalar = ScalarType::Int64;
+    else if (kind == "U8") field.scalar = ScalarType::UInt64;
+    else if (kind == "F4") field.scalar = ScalarType::Float32;
+    else if (kind == "F8") field.scalar = ScalarType::Float64;
+    else
+      throw file_error(path, "PCD header: field '" + field.name + "' has unsupported TYPE " + type_text[f] + " SIZE " +
+                                 size_text[f] + " (expected I/U of size 1, 2, 4, 8 or F of size 4, 8)");
+    field.offset = offset;
+    offset += field.size * field.count;
+  }
+  header.point_stride = offset;
+  if (!have_width) throw file_error(path, "PCD header has no WIDTH line");
+  if (!have_height) header.height = 1;
+  if (header.height != 0 && header.width > std::numeric_limits<std::size_t>::max() / header.height)
+    throw file_error(path, "PCD header: WIDTH x HEIGHT overflows");
+  if (!header.have_points) header.points = header.width * header.height;
+  if (header.points != header.width * header.height)
+    throw file_error(path, "PCD header: POINTS " + std::to_string(header.points) + " differs from WIDTH x HEIGHT = " +
+                               std::to_string(header.width * header.height));
+  header.body_offset = lines.position();
+  header.body_first_line = lines.line_number() + 1;
+  return header;
+}
+
+// Output columns for one PCD field: one column a COUNT element, or red/green/blue for packed colours.
+struct FieldTarget {
+  std::vector<std::size_t> columns;  // indices into the column list (empty for "_" padding)
+};
+
+}  // namespace
+
+PointCloud read_pcd_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report) {
+  const FileBytes bytes = read_file_bytes(path);
+  const PcdHeader header = parse_pcd_header(path, bytes.view());
+  const std::size_t rows = header.points;
+  std::vector<FieldColumn> columns;
+  std::vector<FieldTarget> targets(header.fields.size());
+  report.fields.clear();
+  for (std::size_t f = 0; f < header.fields.size(); ++f) {
+    const PcdField& field = header.fields[f];
+    if (field.name == "_") continue;
+    report.fields.push_back(field.name);
+    if (is_packed_color(field)) {
+      for (const char* channel : {"red", "green", "blue"}) {
+        targets[f].columns.push_back(columns.size());
+        columns.push_back({channel, false, std::vector<double>(rows)});
+      }
+      continue;
+    }
+    for (std::size_t c = 0; c < field.count; ++c) {
+      targets[f].columns.push_back(columns.size());
+      const std::string name = field.count == 1 ? field.name : field.name + "_" + std::to_string(c);
+      columns.push_back({name, scalar_is_floating(field.scalar), std::vector<double>(rows)});
+    }
+  }
+  auto unpack_color = [&](std::size_t f, std::size_t row, std::uint32_t packed) {
+    columns[targets[f].columns[0]].values[row] = (packed >> 16) & 0xFF;
+    columns[targets[f].columns[1]].values[row] = (packed >> 8) & 0xFF;
+    columns[targets[f].columns[2]].values[row] = packed & 0xFF;
+  };
+
+  const std::size_t stride = header.point_stride;
+  const char* body = bytes.data.get() + header.body_offset;
+  const std::size_t available = bytes.size - header.body_offset;
+  if (header.data == "ascii") {
+    LineReader lines(bytes.view(), header.body_offset, header.body_first_line);
+    std::string_view line;
+    std::vector<std::string_view> tokens;
+    std::size_t expected_tokens = 0;
+    for (const PcdField& field : header.fields) expected_tokens += field.count;
+    std::size_t row = 0;
+    while (row < rows && lines.next(line)) {
+      split_tokens(line, tokens);
+      if (tokens.empty()) continue;
+      const std::string where = "line " + std::to_string(lines.line_number()) + ": ";
+      if (tokens.size() != expected_tokens)
+        throw file_error(path, where + "expected " + std::to_string(expected_tokens) + " values, found " +
+                                   std::to_string(tokens.size()));
+      std::size_t token = 0;
+      for (std::size_t f = 0; f < header.fields.size(); ++f) {
+        const PcdField& field = header.fields[f];
+        for (std::size_t c = 0; c < field.count; ++c, ++token) {
+          double value = 0;
+          if (!parse_double(tokens[token], value))
+            throw file_error(path, where + "'" + std::string(tokens[token]) + "' is not a number (field '" +
+                                       field.name + "')");
+          if (targets[f].columns.empty()) continue;
+          if (is_packed_color(field)) {
+            std::uint32_t packed = 0;
+            if (field.type == 'F') {
+              const float as_float = static_cast<float>(value);
+              std::memcpy(&packed, &as_float, 4);
+            } else {
+              packed = static_cast<std::uint32_t>(value);
+            }
+            unpack_color(f, row, packed);
+          } else {
+            columns[targets[f].columns[c]].values[row] = value;
+          }
+        }
+      }
+      ++row;
+    }
+    if (row < rows)
+      throw file_error(path, "truncated: header declares " + std::to_string(rows) + " points, the data has " +
+                                 std::to_string(row) + " lines");
+    report.encoding = "ascii";
+  } else {
+    // Binary: point-major records. binary_compressed: after LZF, field-major arrays (all x, then all y, ...).
+    std::unique_ptr<char[]> decompressed;
+    const char* data = body;
+    const bool field_major = header.data == "binary_compressed";
+    if (stride != 0 && rows > std::numeric_limits<std::size_t>::max() / stride)
+      throw file_error(path, "PCD header: POINTS x record size overflows");
+    const std::size_t needed = rows * stride;
+    if (field_major) {
+      if (available < 8) throw file_error(path, "truncated: binary_compressed data has no size words");
+      std::uint32_t compressed_size = 0, uncompressed_size = 0;
+      std::memcpy(&compressed_size, body, 4);
+      std::memcpy(&uncompressed_size, body + 4, 4);
+      if (uncompressed_size != needed)
+        throw file_error(path, "binary_compressed: uncompressed size " + std::to_string(uncompressed_size) +
+                                   " differs from POINTS x record size = " + std::to_string(needed));
+      if (compressed_size > available - 8)
+        throw file_error(path, "truncated: binary_compressed data declares " + std::to_string(compressed_size) +
+                                   " compressed bytes, only " + std::to_string(available - 8) + " follow");
+      decompressed.reset(new char[needed > 0 ? needed : 1]);
+      if (needed > 0) {
+        const unsigned int produced = pcl::lzfDecompress(body + 8, compressed_size, decompressed.get(),
+                                                         static_cast<unsigned int>(needed));
+        if (produced != needed)
+          throw file_error(path, "binary_compressed: LZF data is corrupt (decompressed " + std::to_string(produced) +
+                                     " of " + std::to_string(needed) + " bytes)");
+      }
+      data = decompressed.get();
+    } else if (available < needed) {
+      throw file_error(path, "truncated: binary data needs " + std::to_string(rows) + " points x " +
+                                 std::to_string(stride) + " bytes = " + std::to_string(needed) + " bytes, only " +
+                                 std::to_string(available) + " follow the header");
+    }
+    std::size_t field_block = 0;  // start of the current field's array in field-major data
+    std::vector<double> packed;
+    for (std::size_t f = 0; f < header.fields.size(); ++f) {
+      const PcdField& field = header.fields[f];
+      const std::size_t element_stride = field_major ? field.size * field.count : stride;
+      const char* base = field_major ? data + field_block : data + field.offset;
+      field_block += rows * field.size * field.count;
+      if (targets[f].columns.empty()) continue;
+      if (is_packed_color(field)) {
+        packed.resize(rows);
+        decode_strided(base, element_stride, rows, ScalarType::UInt32, false, packed.data());
+        for (std::size_t row = 0; row < rows; ++row) unpack_color(f, row, static_cast<std::uint32_t>(packed[row]));
+        continue;
+      }
+      for (std::size_t c = 0; c < field.count; ++c)
+        decode_strided(base + c * field.size, element_stride, rows, field.scalar, false,
+                       columns[targets[f].columns[c]].values.data());
+    }
+    report.encoding = header.data;
+  }
+  return assemble_cloud(path, columns, rows, options, report);
+}
+
+void write_pcd_cloud(const std::string& path, const PointCloud& cloud, bool binary) {
+  const std::size_t n = cloud.size();
+  const bool has_intensity = !cloud.intensity.empty(), has_labels = !cloud.labels.empty();
+  const bool has_colors = !cloud.colors.empty();
+  std::string fields = "FIELDS x y z", sizes = "SIZE 4 4 4", types = "TYPE F F F", counts = "COUNT 1 1 1";
+  auto add = [&](const std::string& name, char type) {
+    fields += " " + name;
+    sizes += " 4";
+    types += std::string(" ") + type;
+    counts += " 1";
+  };
+  if (has_intensity) add("intensity", 'F');
+  if (has_labels) add("label", 'U');
+  if (has_colors) add("rgb", 'U');
+  std::vector<const std::vector<float>*> extras;
+  for (const auto& [name, values] : cloud.extra_fields) {
+    add(name, 'F');
+    extras.push_back(&values);
+  }
+  std::string header = "# .PCD v0.7 - Point Cloud Data file format (written by quadrix)\nVERSION 0.7\n" + fields +
+                       "\n" + sizes + "\n" + types + "\n" + counts + "\nWIDTH " + std::to_string(n) +
+                       "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\nDATA " +
+                       (binary ? "binary" : "ascii") + "\n";
+  auto packed_color = [&](std::size_t i) {
+    return (static_cast<std::uint32_t>(cloud.colors[i][0]) << 16) | (static_cast<std::uint32_t>(cloud.colors[i][1]) << 8) |
+           static_cast<std::uint32_t>(cloud.colors[i][2]);
+  };
+  write_file_atomically(path, [&](std::ostream& stream) {
+    stream.write(header.data(), static_cast<std::streamsize>(header.size()));
+    const float* positions = cloud.positions.data();
+    if (binary) {
+      const std::size_t stride = 12 + 4 * ((has_intensity ? 1 : 0) + (has_labels ? 1 : 0) + (has_colors ? 1 : 0) + extras.size());
+      std::string body(n * stride, '\0');
+      char* cursor = body.data();
+      for (std::size_t i = 0; i < n; ++i) {
+        std::memcpy(cursor, positions + 3 * i, 12);
+        cursor += 12;
+        if (has_intensity) (std::memcpy(cursor, &cloud.intensity[i], 4), cursor += 4);
+        if (has_labels) (std::memcpy(cursor, &cloud.labels[i], 4), cursor += 4);
+        if (has_colors) {
+          const std::uint32_t color = packed_color(i);
+          std::memcpy(cursor, &color, 4);
+          cursor += 4;
+        }
+        for (const std::vector<float>* values : extras) (std::memcpy(cursor, &(*values)[i], 4), cursor += 4);
+      }
+      stream.write(body.data(), static_cast<std::streamsize>(body.size()));
+      return;
+    }
+    std::string text;
+    text.reserve(64 * 1024);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int axis = 0; axis < 3; ++axis) {
+        if (axis) text += ' ';
+        append_number(text, positions[3 * i + axis]);
+      }
+      if (has_intensity) (text += ' ', append_number(text, cloud.intensity[i]));
+      if (has_labels) (text += ' ', append_number(text, static_cast<std::uint64_t>(cloud.labels[i])));
+      if (has_colors) (text += ' ', append_number(text, static_cast<std::uint64_t>(packed_color(i))));
+      for (const std::vector<float>* values : extras) (text += ' ', append_number(text, (*values)[i]));
+      text += '\n';
+      if (text.size() > 60 * 1024) {
+        stream.write(text.data(), static_cast<std::streamsize>(text.size()));
+        text.clear();
+      }
+    }
+    stream.write(text.data(), static_cast<std::streamsize>(text.size()));
+  });
+}
+
+}  // namespace io_internal
+}  // namespace quadrix
