@@ -29,10 +29,10 @@ enum class QuadricType : std::uint8_t {
   CircularCone,           ///< diag(l, l, -lc, 0), apex at the centre, axis c
   EllipticCone,           ///< diag(la, lb, -lc, 0), la != lb
   HyperboloidOneSheet,    ///< diag(+, +, -, -1)
-  HyperboloidTwoSheets,   ///< diag(+, -, -, -1)
-  EllipticParaboloid,     ///< x^2/a^2 + y^2/b^2 - 2z = 0
+  HyperboloidTwoSheets,   ///< diag(+, +, -, +1) after normalisation: two sheets along c
+  EllipticParaboloid,     ///< x^2/a^2 + y^2/b^2 - 2z = 0 (opens towards +c)
   HyperbolicParaboloid,   ///< x^2/a^2 - y^2/b^2 - 2z = 0
-  ParabolicCylinder,      ///< x^2/a^2 - 2y = 0
+  ParabolicCylinder,      ///< x^2/a^2 - 2y = 0 (opens towards +b, ruled along c)
   HyperbolicCylinder,     ///< diag(+, -, 0, -1)
   IntersectingPlanes,     ///< diag(+, -, 0, 0)
   ParallelPlanes,         ///< diag(+, 0, 0, -1)
@@ -66,11 +66,14 @@ struct DegeneracyIndicators {
 /// elliptic cone: every distinct axis defined; spheroid symmetry is resolved by decompose()).
 DegeneracyIndicators degeneracy_indicators(QuadricType type);
 
-/// Tolerances of the decomposition, relative to the largest |eigenvalue| of the normalised Q33.
+/// Tolerances of the decomposition. Eigenvalue tests are relative to the largest |eigenvalue| of
+/// Q33; the centre and constant tests are relative to the magnitudes whose cancellation produces
+/// them, so every decision is invariant to the scale of Q and to the units of length.
 struct DecompositionTolerances {
   double zero_eigenvalue = 1e-9;   ///< |l| below this * max|l| counts as zero (rank decisions)
   double equal_eigenvalues = 1e-6; ///< |la - lb| below this * max|l| counts as equal (symmetry)
-  double consistency = 1e-9;       ///< residual of Q33 t + l = 0, relative, for rank([Q33|l])
+  double consistency = 1e-9;       ///< null-space part of l below this * max(|l|, sqrt(max|l_i| |k|)): consistent
+  double zero_constant = 1e-9;     ///< |c44| below this * max(|k|, |l . t|) counts as zero (rank of Q)
 };
 
 /// Geometric attributes read from Q (paper Eq. (geometry analysis) and Eq. (Q=PCP)).
@@ -100,10 +103,12 @@ class Quadric {
   /// From q = [A..J] of paper Eq. (quadrics equation).
   static Quadric from_parameters(const Vector10d& parameters);
   /// Q = P^-T C P^-1 with C = diag(I_C[0]/s_a^2, I_C[1]/s_b^2, I_C[2]/s_c^2, I_C[3]) (paper Eq. (Q=PCP)
-  /// and the statistical fitter's C_e = S^-T I_C S^-1). Scales of degenerate axes are used as given
-  /// (they weight Q but do not change the surface); cones take s = (tan a, tan b, 1).
-  /// Throws quadrix::Error for types without this canonical form (paraboloids, Invalid, Imaginary)
-  /// or non-positive scales on axes the form uses.
+  /// and the statistical fitter's C_e = S^-T I_C S^-1). Point, line and plane: the scales weight Q
+  /// but do not change the surface; a non-positive one there is replaced by 1 (so the zero scales
+  /// decompose() reports for them round-trip). Cones: C = diag(1/s_a^2, 1/s_b^2, -1, 0) with s_a, s_b
+  /// the tangents of the half-angles (s_c unused); intersecting planes: diag(1/s_a^2, -1, 0, 0).
+  /// Paraboloids use their canonical equations (see QuadricType). Throws quadrix::Error for Invalid
+  /// and Imaginary, non-finite input, or a non-positive scale on an axis the surface depends on.
   static Quadric from_canonical(QuadricType type, const Eigen::Vector3d& scale, const Eigen::Isometry3d& pose);
 
   /// The symmetric 4x4 matrix Q.
@@ -128,12 +133,18 @@ class Quadric {
   Eigen::Matrix4d matrix_ = Eigen::Matrix4d::Zero();
 };
 
+/// The quadric a decomposition describes: from_canonical(type, scale, pose()) (zero for Invalid and
+/// Imaginary types, whose matrix cannot be rebuilt from their attributes).
+Quadric quadric_from_decomposition(const QuadricDecomposition& shape);
+
 /// True Euclidean distance from x to the surface described by a decomposition, for point, line,
 /// plane, sphere, ellipsoid, circular/elliptic cylinder and circular/elliptic cone; for the other
-/// types it returns the first-order (Sampson) distance of the quadric rebuilt from `shape`.
+/// types it returns the first-order (Sampson) distance of the quadric rebuilt from `shape`;
+/// Imaginary and Invalid shapes have no real point: +infinity.
 double orthogonal_distance(const QuadricDecomposition& shape, const Eigen::Vector3d& x);
 
-/// The closest point of the surface to x, for the same types as orthogonal_distance (others: x).
+/// The closest point of the surface to x, for the same types as orthogonal_distance; other real
+/// types: the first-order foot point x - f grad f / |grad f|^2; Imaginary and Invalid: x.
 Eigen::Vector3d closest_surface_point(const QuadricDecomposition& shape, const Eigen::Vector3d& x);
 
 }  // namespace quadrix
