@@ -287,7 +287,7 @@ TriangleMesh mesh_surface(const QuadricDecomposition& shape, const LocalExtent& 
   const Quadric canonical =
       has_canonical_form ? Quadric::from_canonical(shape.type, shape.scale, Eigen::Isometry3d::Identity()) : Quadric();
   const bool line_tube = shape.type == QuadricType::Line;
-  const double area_floor = 1e-24 * size * size;
+  const double area_floor = 1e-14 * size * size;  // collapsed rows (poles, apex) give slivers below this
   std::vector<int> remap(std::size_t(canonical_mesh.vertices.cols()), -1);
   TriangleMesh mesh;
   std::vector<Eigen::Vector3d> kept;

@@ -79,7 +79,7 @@ QuadricRecord QuadricRecord::from_array(const std::array<double, 21>& values) {
   const double norm = rotation.norm();
   if (!(norm > 1e-12))
     throw Error("quadric record: fields 14-17 (full_rotation w, x, y, z) must be a non-zero quaternion");
-  rotation.coeffs() /= norm;
+  if (std::abs(norm - 1.0) > 1e-12) rotation.coeffs() /= norm;  // unit input round-trips bit for bit
   record.full_rotation = rotation;
   for (int i = 0; i < 3; ++i) record.full_center[i] = values[18 + i];
   return record;
