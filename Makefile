@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= 2
 CMAKE_ARGS ?=
 
-.PHONY: all setup configure build test demo clean
+.PHONY: all setup configure build test demo clean train-fitter
 
 all: build
 
@@ -24,3 +24,11 @@ demo: build
 
 clean:
 	rm -rf $(BUILD_DIR)
+
+# Trains the learned fitter (fitting/training/train_learned_fitter.py) on synthetic segments and
+# exports its weights into fitting/models/learned_fitter/. Training only: build and tests never run it.
+# Uses Debian's python3-torch/python3-numpy via /usr/bin/python3 (installed here when missing).
+train-fitter:
+	@/usr/bin/python3 -c "import torch, numpy" 2>/dev/null || \
+	  (apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends python3-torch python3-numpy)
+	/usr/bin/python3 fitting/training/train_learned_fitter.py
