@@ -467,5 +467,37 @@ TEST(QuadricTest, ConeDistanceHandlesAxisApexAndBothNappes) {
   }
 }
 
+// Queries with exact zero coordinates (centre, axes, coordinate planes) are the degenerate cases of
+// the Lagrange/bisection solver (the minimum sits on a pole); check them against brute force.
+TEST(QuadricTest, DistanceOnAxesAndCentreMatchesBruteForce) {
+  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+  LocalExtent extent;
+  extent.minimum = Eigen::Vector3d::Constant(-6.0);
+  extent.maximum = Eigen::Vector3d::Constant(6.0);
+  const double spacing = 0.01;
+  const std::vector<std::pair<QuadricType, Eigen::Vector3d>> shapes = {
+      {QuadricType::Ellipsoid, Eigen::Vector3d(0.7, 1.2, 2.0)},
+      {QuadricType::EllipticCylinder, Eigen::Vector3d(0.7, 1.6, 0.0)},
+      {QuadricType::EllipticCone, Eigen::Vector3d(0.4, 1.1, 0.0)}};
+  std::vector<Eigen::Vector3d> queries = {Eigen::Vector3d::Zero()};
+  for (int k = 0; k < 3; ++k)
+    for (double value : {-2.5, -0.3, 0.2, 1.0, 3.0}) queries.push_back(value * Eigen::Vector3d::Unit(k));
+  queries.push_back(Eigen::Vector3d(0.0, 0.4, 0.5));
+  queries.push_back(Eigen::Vector3d(0.3, 0.0, -0.4));
+  queries.push_back(Eigen::Vector3d(0.2, 0.3, 0.0));
+  for (const auto& [type, scale] : shapes) {
+    const QuadricDecomposition shape = Quadric::from_canonical(type, scale, identity).decompose();
+    ASSERT_EQ(shape.type, type);
+    const Eigen::Matrix3Xd surface = sample_surface(shape, extent, spacing);
+    for (const Eigen::Vector3d& x : queries) {
+      const double exact = orthogonal_distance(shape, x);
+      const double brute = (surface.colwise() - x).colwise().norm().minCoeff();
+      EXPECT_GE(brute, exact - 1e-9) << quadric_type_name(type) << " at " << x.transpose();
+      EXPECT_LE(brute, exact + spacing) << quadric_type_name(type) << " at " << x.transpose();
+      EXPECT_LT(orthogonal_distance(shape, closest_surface_point(shape, x)), 1e-9);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace quadrix
