@@ -58,4 +58,51 @@ struct SceneModel {
   std::size_t augmented_count() const { return records.size() - augmented_begin; }
 };
 
+/// Class of a record label; throws quadrix::Error when the label is not an ElementClass value.
+ElementClass element_class_from_label(std::uint32_t label);
+/// Parses a name of element_class_name(); throws quadrix::Error naming the text otherwise.
+ElementClass element_class_from_name(const std::string& name);
+/// Every element class in ascending value order.
+const std::vector<ElementClass>& all_element_classes();
+
+/// Checks the invariants (parallel vectors of equal size, augmented_begin <= size, one descriptor
+/// per augmented point or none, finite numbers, known labels); throws quadrix::Error naming the field.
+void validate_scene_model(const SceneModel& model);
+
+/// Binary scene-model format, version 1 (all little-endian, IEEE-754):
+///   magic "QDXSCENE" (8 bytes), u32 version = 1,
+///   u64 record count N, u64 augmented_begin, u64 source_point_count,
+///   u8 has_ground, f64 ground_normal[3], f64 ground_offset,
+///   N x { f64 record[21] in Struct. 1 order, u8 QuadricType, u32 element point count },
+///   u64 descriptor count D (0 or N - augmented_begin), D x f32[33],
+///   u32 timing count T, T x { u32 name length, name bytes (UTF-8), f64 milliseconds },
+///   u32 FNV-1a checksum of every preceding byte.
+inline constexpr std::uint32_t kSceneModelBinaryVersion = 1;
+
+/// Serialised bytes of the binary format (see kSceneModelBinaryVersion).
+std::string scene_model_to_binary(const SceneModel& model);
+/// Parses the binary format; throws quadrix::Error naming `source_name`, the field and what was
+/// expected (bad magic, unknown version, truncation, checksum mismatch, invalid record).
+SceneModel scene_model_from_binary(const std::string& bytes, const std::string& source_name = "<memory>");
+/// Writes the binary format atomically.
+void write_scene_model_binary(const std::string& path, const SceneModel& model);
+/// Reads the binary format; errors name the file.
+SceneModel read_scene_model_binary(const std::string& path);
+
+/// JSON document of a model: {"format": "quadrix-scene-model", "version": 1, "quadrics": [one
+/// object per record: index, label, class, type, points, augmented, q[10], scale[3] (s_f),
+/// rotation[4] (eta_f w,x,y,z), rotation_matrix[9] (row-major R_f), center[3] (t_f), record[21]],
+/// "ground": {found, normal, offset}, "augmented_begin", "augmented_descriptors": [[33]...],
+/// "stats": {source_points, records, augmented_points, counts_by_class, counts_by_type, timings_ms,
+/// binary_bytes} plus the members of `extra_stats` (the inside of a JSON object, e.g. "\"a\": 1", or empty)}.
+/// Numbers are written with 17 significant digits, so reading returns the same doubles.
+std::string scene_model_to_json(const SceneModel& model, const std::string& extra_stats = "");
+/// Parses scene_model_to_json output (reads records, types, point counts, ground, augmented_begin,
+/// descriptors, source_points and timings_ms); throws quadrix::Error naming the field otherwise.
+SceneModel scene_model_from_json(const std::string& text, const std::string& source_name = "<memory>");
+/// Writes scene_model_to_json atomically.
+void write_scene_model_json(const std::string& path, const SceneModel& model, const std::string& extra_stats = "");
+/// Reads a JSON model; errors name the file.
+SceneModel read_scene_model_json(const std::string& path);
+
 }  // namespace quadrix

@@ -1,0 +1,96 @@
+// Line extraction (paper §"Quadric Extraction", step 1(c)): RANSAC on each cluster left after
+// ground and planes; a line must dominate its cluster, be long enough, and (by default) stand
+// roughly upright like a pole. Hypotheses are refined by PCA of their inliers.
+#include "fitting/extraction.h"
+#include "fitting/extraction_internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace quadrix {
+namespace {
+
+struct LineModel {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+};
+
+double distance_to_line(const LineModel& line, const Eigen::Vector3d& x) {
+  const Eigen::Vector3d d = x - line.point;
+  return (d - d.dot(line.direction) * line.direction).norm();
+}
+
+}  // namespace
+
+std::vector<Element> extract_lines(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
+                                   const LineOptions& options, const Eigen::Vector3d& up_axis,
+                                   std::vector<std::uint32_t>& remaining) {
+  std::vector<Element> lines;
+  remaining = cluster;
+  const Eigen::Vector3d up = up_axis.normalized();
+  const double cos_tilt = std::cos(std::min(options.max_tilt_deg, 90.0) * 3.14159265358979323846 / 180.0);
+  // Deterministic per cluster: the seed mixes in the first index, so the result does not depend on
+  // the order clusters are processed in (they run in parallel).
+  std::mt19937_64 engine(options.seed ^ (cluster.empty() ? 0u : 0x9E3779B97F4A7C15ull * (cluster.front() + 1)));
+  for (int line_number = 0; line_number < options.maximum_lines_per_cluster; ++line_number) {
+    const std::size_t count = remaining.size();
+    if (static_cast<int>(count) < std::max(options.minimum_points, 2)) break;
+    std::uniform_int_distribution<std::size_t> pick(0, count - 1);
+    LineModel best;
+    std::size_t best_inliers = 0;
+    for (int iteration = 0; iteration < options.iterations; ++iteration) {
+      const std::size_t a = pick(engine), b = pick(engine);
+      if (a == b) continue;
+      const Eigen::Vector3d pa = points.col(remaining[a]), pb = points.col(remaining[b]);
+      const double length = (pb - pa).norm();
+      if (length < 1e-6) continue;
+      LineModel model{pa, (pb - pa) / length};
+      if (std::abs(model.direction.dot(up)) < cos_tilt) continue;
+      std::size_t inliers = 0;
+      for (const std::uint32_t index : remaining)
+        inliers += distance_to_line(model, points.col(index)) <= options.inlier_distance;
+      if (inliers > best_inliers) {
+        best_inliers = inliers;
+        best = model;
+      }
+    }
+    if (static_cast<int>(best_inliers) < options.minimum_points) break;
+    // Refine: PCA line of the inliers, then the final inlier set of the refined line.
+    for (int refinement = 0; refinement < 2; ++refinement) {
+      detail::Moments moments;
+      for (const std::uint32_t index : remaining)
+        if (distance_to_line(best, points.col(index)) <= options.inlier_distance) moments.add(points.col(index));
+      if (moments.count < 2) break;
+      const detail::Principal axes = detail::principal_axes(moments.covariance());
+      best.point = moments.mean();
+      best.direction = axes.vectors.col(2);
+    }
+    std::vector<std::uint32_t> on_line, off_line;
+    double lowest = 1e300, highest = -1e300;
+    for (const std::uint32_t index : remaining) {
+      const Eigen::Vector3d x = points.col(index);
+      if (distance_to_line(best, x) <= options.inlier_distance) {
+        on_line.push_back(index);
+        const double s = (x - best.point).dot(best.direction);
+        lowest = std::min(lowest, s);
+        highest = std::max(highest, s);
+      } else {
+        off_line.push_back(index);
+      }
+    }
+    const bool upright = std::abs(best.direction.dot(up)) >= cos_tilt;
+    const bool dominant = static_cast<double>(on_line.size()) >= options.minimum_inlier_fraction * static_cast<double>(count);
+    if (!upright || !dominant || static_cast<int>(on_line.size()) < options.minimum_points ||
+        highest - lowest < options.minimum_length)
+      break;
+    Element line;
+    line.element_class = ElementClass::Line;
+    line.point_indices = std::move(on_line);
+    lines.push_back(std::move(line));
+    remaining = std::move(off_line);
+  }
+  return lines;
+}
+
+}  // namespace quadrix

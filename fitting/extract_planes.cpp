@@ -1,0 +1,149 @@
+// Plane extraction (paper §"Quadric Extraction", step 1(b)): the non-ground points are voxelised,
+// each voxel's eigenvalue ratio lambda_2 / lambda_1 decides whether it is planar, and neighbouring
+// planar voxels with agreeing normals and nearby centroids are merged by region growing (as in
+// G3Reg). The alternative is CGAL's region growing on the point set (cgal_shape_detection.cpp).
+#include "fitting/extraction.h"
+#include "fitting/extraction_internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <unordered_map>
+
+namespace quadrix {
+namespace {
+
+struct Voxel {
+  Eigen::Vector3i coordinate;            // integer voxel coordinate
+  std::vector<std::uint32_t> members;    // points inside
+  detail::Moments moments;               // their moments
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // smallest principal axis
+  bool planar = false;                   // passed the eigenvalue-ratio test
+  int region = -1;                       // region id while growing
+};
+
+// Second-largest statistical scale of a point set: the in-plane width of a plane.
+double second_scale(const detail::Moments& moments) {
+  const detail::Principal axes = detail::principal_axes(moments.covariance());
+  return kStatisticalScaleFactor * std::sqrt(axes.values(1));
+}
+
+bool plane_is_large_enough(const detail::Moments& moments, std::size_t voxels, const PlaneOptions& options) {
+  return moments.count >= options.minimum_plane_points && static_cast<int>(voxels) >= options.minimum_plane_voxels &&
+         second_scale(moments) >= options.minimum_plane_extent;
+}
+
+std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
+                                          const PlaneOptions& options, std::vector<std::uint32_t>& remaining) {
+  std::vector<Voxel> voxels;
+  std::unordered_map<std::uint64_t, int> voxel_of_key;
+  voxel_of_key.reserve(candidates.size() / 4 + 16);
+  const double inverse = 1.0 / options.voxel_size;
+  for (const std::uint32_t index : candidates) {
+    const Eigen::Vector3d p = points.col(index);
+    const Eigen::Vector3i c((p * inverse).array().floor().cast<int>());
+    const std::uint64_t key = detail::voxel_key(c.x(), c.y(), c.z());
+    auto [it, inserted] = voxel_of_key.try_emplace(key, static_cast<int>(voxels.size()));
+    if (inserted) {
+      voxels.emplace_back();
+      voxels.back().coordinate = c;
+    }
+    Voxel& voxel = voxels[it->second];
+    voxel.members.push_back(index);
+    voxel.moments.add(p);
+  }
+  // Eigenvalue-ratio test per voxel (ratio of the second smallest to the smallest eigenvalue).
+  std::vector<int> planar_order;
+  for (int id = 0; id < static_cast<int>(voxels.size()); ++id) {
+    Voxel& voxel = voxels[id];
+    if (static_cast<int>(voxel.members.size()) < options.minimum_voxel_points) continue;
+    const detail::Principal axes = detail::principal_axes(voxel.moments.covariance());
+    const double smallest = std::max(axes.values(0), 1e-12 * options.voxel_size * options.voxel_size);
+    voxel.planar = axes.values(1) > options.eigenvalue_ratio * smallest && axes.values(1) > 0.05 * axes.values(2);
+    voxel.normal = axes.vectors.col(0);
+    if (voxel.planar) planar_order.push_back(id);
+  }
+  std::sort(planar_order.begin(), planar_order.end(),
+            [&](int a, int b) { return voxels[a].members.size() > voxels[b].members.size(); });
+
+  std::vector<Element> planes;
+  std::vector<char> in_plane(voxels.size(), 0);
+  int region_id = 0;
+  for (const int seed : planar_order) {
+    if (voxels[seed].region >= 0) continue;
+    const int region = region_id++;
+    detail::Moments moments = voxels[seed].moments;
+    Eigen::Vector3d normal = voxels[seed].normal;
+    Eigen::Vector3d center = moments.mean();
+    std::vector<int> members = {seed};
+    voxels[seed].region = region;
+    std::queue<int> queue;
+    queue.push(seed);
+    while (!queue.empty()) {
+      const Voxel& current = voxels[queue.front()];
+      queue.pop();
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            if (dx == 0 && dy == 0 && dz == 0) continue;
+            const Eigen::Vector3i c = current.coordinate + Eigen::Vector3i(dx, dy, dz);
+            const auto it = voxel_of_key.find(detail::voxel_key(c.x(), c.y(), c.z()));
+            if (it == voxel_of_key.end()) continue;
+            Voxel& neighbour = voxels[it->second];
+            if (!neighbour.planar || neighbour.region >= 0) continue;
+            if (std::abs(neighbour.normal.dot(normal)) < options.normal_cosine) continue;
+            if (std::abs(normal.dot(neighbour.moments.mean() - center)) > options.merge_distance) continue;
+            neighbour.region = region;
+            members.push_back(it->second);
+            queue.push(it->second);
+            moments.add(neighbour.moments);
+            normal = detail::principal_axes(moments.covariance()).vectors.col(0);
+            center = moments.mean();
+          }
+    }
+    if (!plane_is_large_enough(moments, members.size(), options)) continue;  // voxels go back to clustering
+    Element plane;
+    plane.element_class = ElementClass::Plane;
+    for (const int id : members) {
+      in_plane[id] = 1;
+      plane.point_indices.insert(plane.point_indices.end(), voxels[id].members.begin(), voxels[id].members.end());
+    }
+    planes.push_back(std::move(plane));
+  }
+  remaining.clear();
+  for (std::size_t id = 0; id < voxels.size(); ++id)
+    if (!in_plane[id]) remaining.insert(remaining.end(), voxels[id].members.begin(), voxels[id].members.end());
+  return planes;
+}
+
+}  // namespace
+
+std::vector<Element> extract_planes(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
+                                    const PlaneOptions& options, std::vector<std::uint32_t>& remaining) {
+  if (candidates.empty()) {
+    remaining.clear();
+    return {};
+  }
+  if (options.method == PlaneMethod::VoxelRegionGrowing) return voxel_region_growing(points, candidates, options, remaining);
+
+  const std::vector<std::vector<std::uint32_t>> regions = detail::cgal_region_growing_planes(points, candidates, options);
+  std::vector<char> in_plane(static_cast<std::size_t>(points.cols()), 0);
+  std::vector<Element> planes;
+  for (const auto& region : regions) {
+    detail::Moments moments;
+    for (const std::uint32_t index : region) moments.add(points.col(index));
+    // A region spanning the minimum voxel count of the voxel method: its width already covers it.
+    if (!plane_is_large_enough(moments, static_cast<std::size_t>(options.minimum_plane_voxels), options)) continue;
+    Element plane;
+    plane.element_class = ElementClass::Plane;
+    plane.point_indices = region;
+    for (const std::uint32_t index : region) in_plane[index] = 1;
+    planes.push_back(std::move(plane));
+  }
+  remaining.clear();
+  for (const std::uint32_t index : candidates)
+    if (!in_plane[index]) remaining.push_back(index);
+  return planes;
+}
+
+}  // namespace quadrix

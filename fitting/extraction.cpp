@@ -1,0 +1,272 @@
+// Whole extraction pipeline (paper §"Quadric Extraction"), sensor presets (REFERENCE.md table of
+// the released configs) and the SemanticKITTI label mapping of the `labels` semantic mode.
+#include "fitting/extraction.h"
+#include "fitting/extraction_internal.h"
+
+#include "geometry/error.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace quadrix {
+
+std::string extraction_status_name(ExtractionStatus status) {
+  switch (status) {
+    case ExtractionStatus::Ok: return "ok";
+    case ExtractionStatus::EmptyCloud: return "empty_cloud";
+    case ExtractionStatus::NoGround: return "no_ground";
+    case ExtractionStatus::NoElements: return "no_elements";
+  }
+  return "unknown";
+}
+
+std::vector<std::string> extraction_preset_names() { return {"vlp64", "vlp16", "mid360", "avia", "monument"}; }
+
+ExtractionOptions extraction_preset(const std::string& name) {
+  ExtractionOptions options;  // HDL-64E values (range 2-80 m, voxel 1.0 m, merge 0.20 m, cos 0.95, ratio 30, 20 pts)
+  options.preset = name;
+  if (name == "vlp64") return options;
+  // The other sensors: the table gives voxel, merge distance, normal cosine and eigenvalue ratio;
+  // values it leaves open keep the HDL-64E ones.
+  if (name == "vlp16") {
+    options.planes.voxel_size = 1.4;
+    options.planes.merge_distance = 0.28;
+    options.planes.eigenvalue_ratio = 16.0;
+    return options;
+  }
+  if (name == "mid360") {
+    options.planes.voxel_size = 1.2;
+    options.planes.merge_distance = 0.25;
+    options.planes.eigenvalue_ratio = 18.0;
+    options.minimum_range = 0.5;  // solid-state, no ego-vehicle ring to remove
+    return options;
+  }
+  if (name == "avia") {
+    options.planes.voxel_size = 1.0;
+    options.planes.merge_distance = 0.22;
+    options.planes.eigenvalue_ratio = 20.0;
+    options.minimum_range = 0.5;
+    return options;
+  }
+  if (name == "monument") {
+    options.static_scan = true;  // CGAL Efficient RANSAC shapes (paper Fig. "quadric modeling of Pantheon")
+    options.minimum_range = 0.0;
+    options.maximum_range = 0.0;
+    return options;
+  }
+  std::string valid;
+  for (const auto& preset : extraction_preset_names()) valid += (valid.empty() ? "" : ", ") + preset;
+  throw Error("unknown extraction preset '" + name + "' (expected one of: " + valid + ")");
+}
+
+bool element_class_for_semantic_kitti_label(std::uint32_t label, ElementClass& element_class) {
+  switch (label & 0xFFFFu) {
+    case 10: case 11: case 13: case 15: case 18: case 20:   // car, bicycle, bus, motorcycle, truck, other-vehicle
+    case 252: case 253: case 254: case 255: case 256: case 257: case 258: case 259:  // moving variants
+      element_class = ElementClass::Vehicle;
+      return true;
+    case 40: case 44: case 48: case 49: case 72:  // road, parking, sidewalk, other-ground, terrain
+      element_class = ElementClass::Ground;
+      return true;
+    case 50: case 51: case 52:  // building, fence, other-structure
+      element_class = ElementClass::Plane;
+      return true;
+    case 70:
+      element_class = ElementClass::Vegetation;
+      return true;
+    case 71:
+      element_class = ElementClass::Trunk;
+      return true;
+    case 80: case 81:  // pole, traffic-sign
+      element_class = ElementClass::Line;
+      return true;
+    default:
+      return false;
+  }
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Clusters that are too wide or do not rise above the ground are clutter, not objects.
+bool keep_cluster(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
+                  const std::vector<float>& height_of_point, const ClusterOptions& options) {
+  Eigen::Vector3d lower = Eigen::Vector3d::Constant(1e300), upper = Eigen::Vector3d::Constant(-1e300);
+  float top = -1e30f;
+  for (const std::uint32_t index : cluster) {
+    lower = lower.cwiseMin(points.col(index));
+    upper = upper.cwiseMax(points.col(index));
+    if (!height_of_point.empty()) top = std::max(top, height_of_point[index]);
+  }
+  if ((upper - lower).norm() > options.maximum_extent) return false;
+  return height_of_point.empty() || top >= options.minimum_height_above_ground;
+}
+
+void set_ground(ExtractionResult& result, const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& ground,
+                const Eigen::Vector3d& up, const GroundSegmentation* segmentation) {
+  if (ground.size() < 3) return;
+  Element element;
+  element.element_class = ElementClass::Ground;
+  element.point_indices = ground;
+  result.elements.insert(result.elements.begin(), std::move(element));
+  result.has_ground = true;
+  if (segmentation != nullptr) {
+    result.ground_normal = segmentation->normal;
+    result.ground_offset = segmentation->offset;
+    return;
+  }
+  detail::Moments moments;
+  for (const std::uint32_t index : ground) moments.add(points.col(index));
+  Eigen::Vector3d normal = detail::principal_axes(moments.covariance()).vectors.col(0);
+  if (normal.dot(up) < 0) normal = -normal;
+  result.ground_normal = normal;
+  result.ground_offset = -normal.dot(moments.mean());
+}
+
+// Lines then objects from the clusters (paper step 1(c) and the geometry-only key objects).
+void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::vector<std::uint32_t>>& clusters,
+                       const ExtractionOptions& options, const Eigen::Vector3d& up, std::vector<Element>& lines,
+                       std::vector<Element>& objects) {
+  std::vector<std::vector<Element>> lines_per_cluster(clusters.size());
+  std::vector<std::vector<std::uint32_t>> rest_per_cluster(clusters.size());
+  tbb::parallel_for(std::size_t(0), clusters.size(), [&](std::size_t c) {
+    lines_per_cluster[c] = extract_lines(points, clusters[c], options.lines, up, rest_per_cluster[c]);
+  });
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    for (Element& line : lines_per_cluster[c]) lines.push_back(std::move(line));
+    if (static_cast<int>(rest_per_cluster[c].size()) >= options.clusters.minimum_points) {
+      Element object;
+      object.element_class = ElementClass::Object;
+      object.point_indices = std::move(rest_per_cluster[c]);
+      objects.push_back(std::move(object));
+    }
+  }
+}
+
+}  // namespace
+
+ExtractionResult extract_elements(const PointCloud& cloud, const ExtractionOptions& options,
+                                  const std::vector<std::uint32_t>& labels) {
+  const auto start = Clock::now();
+  if (options.semantic_mode == SemanticMode::Labels && labels.size() != cloud.size())
+    throw Error("labels semantic mode: " + std::to_string(labels.size()) + " labels for " +
+                std::to_string(cloud.size()) + " points (expected one label per point)");
+  if (!(options.up.norm() > 0.0) || !options.up.allFinite())
+    throw Error("extraction option 'up' must be a finite non-zero vector");
+  const Eigen::Vector3d up = options.up.normalized();
+  const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
+
+  ExtractionResult result;
+  // Range limits around the sensor (REFERENCE.md: HDL-64E 2-80 m).
+  std::vector<std::uint32_t> in_range;
+  in_range.reserve(cloud.size());
+  const double minimum_squared = options.minimum_range * options.minimum_range;
+  const double maximum_squared = options.maximum_range > 0.0 ? options.maximum_range * options.maximum_range : 1e300;
+  for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+    const double squared = (points.col(i) - options.sensor_origin).squaredNorm();
+    if (squared >= minimum_squared && squared <= maximum_squared) in_range.push_back(i);
+  }
+  result.points_in_range = in_range.size();
+  result.timings_ms["crop"] = detail::elapsed_ms(start);
+  if (in_range.empty()) {
+    result.status = ExtractionStatus::EmptyCloud;
+    result.message = cloud.empty() ? "the cloud has no points"
+                                   : "no point within the range limits (" + std::to_string(options.minimum_range) + " to " +
+                                         std::to_string(options.maximum_range) + " m)";
+    return result;
+  }
+
+  if (options.static_scan) {
+    Eigen::Matrix3Xd normals;
+    const auto nx = cloud.extra_fields.find("nx"), ny = cloud.extra_fields.find("ny"), nz = cloud.extra_fields.find("nz");
+    if (nx != cloud.extra_fields.end() && ny != cloud.extra_fields.end() && nz != cloud.extra_fields.end()) {
+      normals.resize(3, static_cast<Eigen::Index>(in_range.size()));
+      for (std::size_t i = 0; i < in_range.size(); ++i)
+        normals.col(static_cast<Eigen::Index>(i)) =
+            Eigen::Vector3d(nx->second[in_range[i]], ny->second[in_range[i]], nz->second[in_range[i]]);
+    }
+    ExtractionResult shapes = detect_shapes(detail::gather_points(points, in_range), normals, options);
+    for (Element& element : shapes.elements)
+      for (std::uint32_t& index : element.point_indices) index = in_range[index];
+    shapes.points_in_range = in_range.size();
+    shapes.timings_ms["crop"] = result.timings_ms["crop"];
+    return shapes;
+  }
+
+  std::vector<Element> planes, lines, objects;
+  if (options.semantic_mode == SemanticMode::Labels) {
+    auto stage = Clock::now();
+    std::vector<std::uint32_t> ground;
+    std::vector<std::uint32_t> per_class[11];
+    for (const std::uint32_t index : in_range) {
+      ElementClass element_class;
+      if (!element_class_for_semantic_kitti_label(labels[index], element_class)) continue;
+      if (element_class == ElementClass::Ground)
+        ground.push_back(index);
+      else
+        per_class[static_cast<int>(element_class)].push_back(index);
+    }
+    set_ground(result, points, ground, up, nullptr);
+    result.timings_ms["ground"] = detail::elapsed_ms(stage);
+    stage = Clock::now();
+    std::vector<std::uint32_t> remaining;
+    planes = extract_planes(points, per_class[static_cast<int>(ElementClass::Plane)], options.planes, remaining);
+    result.timings_ms["planes"] = detail::elapsed_ms(stage);
+    stage = Clock::now();
+    // Labelled classes: each Euclidean cluster of a class is one element of that class.
+    for (const ElementClass element_class :
+         {ElementClass::Line, ElementClass::Vehicle, ElementClass::Trunk, ElementClass::Vegetation}) {
+      for (auto& cluster : euclidean_clusters(points, per_class[static_cast<int>(element_class)], options.clusters)) {
+        Element element;
+        element.element_class = element_class;
+        element.point_indices = std::move(cluster);
+        (element_class == ElementClass::Line ? lines : objects).push_back(std::move(element));
+      }
+    }
+    result.timings_ms["clusters"] = detail::elapsed_ms(stage);
+  } else {
+    auto stage = Clock::now();
+    const GroundSegmentation ground = segment_ground(points, in_range, options.ground, options.sensor_origin, up);
+    if (ground.found) set_ground(result, points, ground.ground_indices, up, &ground);
+    result.timings_ms["ground"] = detail::elapsed_ms(stage);
+    std::vector<float> height_of_point(static_cast<std::size_t>(points.cols()), 1e9f);
+    for (std::size_t i = 0; i < ground.other_indices.size(); ++i)
+      height_of_point[ground.other_indices[i]] = ground.other_heights[i];
+
+    stage = Clock::now();
+    std::vector<std::uint32_t> remaining;
+    planes = extract_planes(points, ground.other_indices, options.planes, remaining);
+    result.timings_ms["planes"] = detail::elapsed_ms(stage);
+
+    stage = Clock::now();
+    std::vector<std::vector<std::uint32_t>> clusters = euclidean_clusters(points, remaining, options.clusters);
+    clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
+                                  [&](const auto& cluster) {
+                                    return !keep_cluster(points, cluster, ground.found ? height_of_point : std::vector<float>(),
+                                                         options.clusters);
+                                  }),
+                   clusters.end());
+    result.timings_ms["clusters"] = detail::elapsed_ms(stage);
+    stage = Clock::now();
+    lines_and_objects(points, clusters, options, up, lines, objects);
+    result.timings_ms["lines"] = detail::elapsed_ms(stage);
+  }
+  for (auto* group : {&planes, &lines, &objects})
+    for (Element& element : *group) result.elements.push_back(std::move(element));
+  if (result.elements.empty()) {
+    result.status = ExtractionStatus::NoElements;
+    result.message = "no ground, plane, line or cluster passed the size tests among " +
+                     std::to_string(in_range.size()) + " points in range";
+  } else if (!result.has_ground) {
+    result.status = ExtractionStatus::NoGround;
+    result.message = "no ground found; planes, lines and objects were still extracted";
+  }
+  result.timings_ms["extraction"] = detail::elapsed_ms(start);
+  return result;
+}
+
+}  // namespace quadrix

@@ -1,0 +1,221 @@
+// Element extraction (paper §"Quadric Extraction"): a point cloud is reduced to key elements —
+// the ground E_g, planes E_p, lines E_l and object clusters E_o — each a subset of points with a
+// semantic class. LiDAR scans use ground segmentation, voxel planes, clustering and RANSAC lines;
+// static scans (monument preset) use CGAL Efficient RANSAC shape detection.
+#pragma once
+
+#include "fitting/scene_model.h"
+#include "geometry/point_cloud.h"
+#include "geometry/quadric.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace quadrix {
+
+/// Where element classes come from (paper: semantic labels when reliable, else geometry).
+enum class SemanticMode {
+  Cluster,  ///< geometry only: ground, voxel planes, RANSAC lines, remaining clusters -> objects (default)
+  Labels,   ///< per-point SemanticKITTI labels mapped by element_class_for_semantic_kitti_label
+};
+
+/// Plane extraction algorithm for non-ground points.
+enum class PlaneMethod {
+  VoxelRegionGrowing,  ///< the paper's: voxel eigenvalue-ratio test + region growing over planar voxels (default)
+  CgalRegionGrowing,   ///< CGAL Shape_detection region growing on the point set (PCA normals, k neighbours)
+};
+
+/// Euclidean clustering backend (both give identical clusters: connected components at a radius).
+enum class ClusterMethod {
+  Grid,  ///< hash grid with cell = radius, union-find over neighbouring cells (default, faster)
+  Pcl,   ///< pcl::EuclideanClusterExtraction with a k-d tree
+};
+
+/// Outcome of an extraction.
+enum class ExtractionStatus {
+  Ok,              ///< elements extracted
+  EmptyCloud,      ///< no point inside the range limits
+  NoGround,        ///< no ground found (other elements may still exist)
+  NoElements,      ///< points present but no element passed the size tests
+};
+
+/// Lower-case name of a status ("ok", "empty_cloud", "no_ground", "no_elements").
+std::string extraction_status_name(ExtractionStatus status);
+
+/// Ground segmentation (replaces the paper's TRAVEL): a concentric-zone patch model like
+/// Patchwork. The plane around the sensor is split into rings x sectors; in each patch a plane is
+/// fitted by PCA to its lowest points and refined on its inliers; patches whose plane is upright,
+/// flat and continuous (in height and slope) with an accepted neighbour are grown outwards from the
+/// best-supported patch. Handles slopes (each patch has its own plane) and kerbs (a kerb breaks
+/// height continuity only by its own height, below `max_step_height`).
+struct GroundOptions {
+  std::vector<double> ring_edges = {0.0, 4.0, 8.0, 12.0, 16.0, 22.0, 30.0, 40.0, 55.0, 80.0, 200.0};  ///< ring radii around the sensor, m
+  int sectors_near = 16;                  ///< sectors of the innermost ring (later rings get proportionally more, capped)
+  int sectors_max = 64;                   ///< upper bound on sectors per ring
+  int minimum_patch_points = 10;          ///< patches with fewer points are not fitted
+  double seed_height = 0.4;               ///< seed points: within this height (m) above the mean of the lowest points
+  int lowest_points = 20;                 ///< how many lowest points define the patch floor
+  double inlier_distance = 0.15;          ///< point-to-patch-plane distance (m) for ground points
+  int refinement_iterations = 3;          ///< PCA refits on inliers
+  double max_slope_deg = 25.0;            ///< patch normal at most this far from the up axis, degrees
+  double max_flatness = 0.01;             ///< smallest / sum of eigenvalues of an accepted patch (planarity)
+  double max_step_height = 0.4;           ///< height jump (m) allowed between neighbouring patch planes at their shared border
+  double max_neighbour_angle_deg = 15.0;  ///< angle allowed between neighbouring patch normals, degrees
+};
+
+/// Paper's plane extraction (G3Reg-style): voxelise P \ E_g, keep voxels whose eigenvalue ratio
+/// lambda_2 / lambda_1 (second smallest / smallest) exceeds the threshold, merge neighbouring planar
+/// voxels whose normals agree and whose centroids lie near the growing plane.
+struct PlaneOptions {
+  PlaneMethod method = PlaneMethod::VoxelRegionGrowing;  ///< which algorithm
+  double voxel_size = 1.0;             ///< plane voxel edge, m (HDL-64E: 1.0)
+  double merge_distance = 0.20;        ///< centroid-to-plane distance for merging voxels / CGAL region distance, m (HDL-64E: 0.20)
+  double normal_cosine = 0.95;         ///< |cos| between normals to merge (HDL-64E: 0.95)
+  double eigenvalue_ratio = 30.0;      ///< lambda_2 / lambda_1 above which a voxel is planar (HDL-64E: 30)
+  int minimum_voxel_points = 8;        ///< voxels with fewer points are not tested
+  int minimum_plane_points = 80;       ///< planes with fewer points are returned to clustering
+  int minimum_plane_voxels = 2;        ///< planes spanning fewer voxels are returned to clustering
+  double minimum_plane_extent = 1.5;   ///< second-largest statistical scale of a plane at least this, m
+  int cgal_neighbours = 12;            ///< CgalRegionGrowing: k nearest neighbours for normals and growing
+};
+
+/// Euclidean clustering of the points left after ground and planes (paper: clusters of TRAVEL).
+struct ClusterOptions {
+  ClusterMethod method = ClusterMethod::Grid;  ///< backend
+  double radius = 0.5;                 ///< points closer than this join one cluster, m
+  int minimum_points = 20;             ///< smaller clusters are dropped (HDL-64E: 20)
+  int maximum_points = 20000;          ///< larger clusters are dropped (merged clutter)
+  double maximum_extent = 20.0;        ///< clusters with a larger bounding-box diagonal are dropped, m
+  double minimum_height_above_ground = 0.2;  ///< cluster tops lower than this above the ground plane are dropped, m
+};
+
+/// RANSAC lines on clusters (paper: "RANSAC is applied to detect lines").
+struct LineOptions {
+  double inlier_distance = 0.12;       ///< point-to-line distance for inliers, m
+  int iterations = 100;                ///< RANSAC hypotheses per line
+  int minimum_points = 15;             ///< inliers a line needs
+  double minimum_length = 1.2;         ///< extent of the inliers along the line, m
+  double minimum_inlier_fraction = 0.6;  ///< inliers / cluster points: a line must dominate its cluster
+  double max_tilt_deg = 30.0;          ///< line direction at most this far from the up axis (poles), degrees; 90 accepts any
+  int maximum_lines_per_cluster = 2;   ///< lines taken from one cluster (pole + arm)
+  std::uint64_t seed = 42;             ///< RANSAC random seed (deterministic)
+};
+
+/// CGAL Efficient RANSAC for static scans (Schnabel et al. 2007). Every parameter is set
+/// explicitly (CGAL 5.5 defaults disagree with its documentation).
+struct ShapeDetectionOptions {
+  double simplification_voxel = 0.05;  ///< grid simplification before normals, m (0: off)
+  int normal_neighbours = 18;          ///< k of CGAL jet normal estimation
+  double probability = 0.01;           ///< probability to miss the largest candidate shape
+  int minimum_points = 200;            ///< min_points: smallest shape, points
+  double epsilon = 0.03;               ///< max point-to-shape distance, m
+  double cluster_epsilon = 0.15;       ///< max distance between connected points of a shape, m
+  double normal_threshold = 0.9;       ///< min |cos| between point normal and shape normal
+  bool detect_planes = true;           ///< look for planes
+  bool detect_cylinders = true;        ///< look for cylinders
+  bool detect_spheres = true;          ///< look for spheres
+  bool detect_cones = true;            ///< look for cones
+  bool detect_tori = false;            ///< look for tori (not quadrics: kept as Object elements, fitted as ellipsoids)
+  bool mark_ground = true;             ///< the lowest large plane whose normal is within 10 deg of up becomes the Ground
+  std::uint32_t seed = 7;              ///< seed of CGAL's default random generator before detection (deterministic runs)
+};
+
+/// Everything extraction needs. Defaults are the HDL-64E values of the released configs.
+struct ExtractionOptions {
+  std::string preset = "vlp64";        ///< name of the preset these values came from (reported)
+  SemanticMode semantic_mode = SemanticMode::Cluster;  ///< geometry-only or label-driven
+  bool static_scan = false;            ///< true: CGAL Efficient RANSAC shapes instead of the LiDAR pipeline
+  double minimum_range = 2.0;          ///< points nearer the sensor are dropped (ego vehicle), m
+  double maximum_range = 80.0;         ///< points farther away are dropped, m (0: unlimited)
+  Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();  ///< scanner position (ranges, patch centre, normal orientation)
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();            ///< up axis of the cloud (unit after normalisation)
+  GroundOptions ground;                ///< ground segmentation
+  PlaneOptions planes;                 ///< plane extraction
+  ClusterOptions clusters;             ///< clustering
+  LineOptions lines;                   ///< line RANSAC
+  ShapeDetectionOptions shapes;        ///< static-scan shape detection
+};
+
+/// Presets from the released configs (REFERENCE.md "Extraction parameters per sensor"):
+/// vlp64 (HDL-64E), vlp16, mid360, avia, monument (static TLS scan, CGAL shapes). Throws
+/// quadrix::Error naming the valid presets otherwise.
+ExtractionOptions extraction_preset(const std::string& name);
+/// Names accepted by extraction_preset, in listing order.
+std::vector<std::string> extraction_preset_names();
+
+/// One key element: points of the cloud with a semantic class.
+struct Element {
+  ElementClass element_class = ElementClass::Object;  ///< semantic class (decides the fitted type)
+  std::vector<std::uint32_t> point_indices;           ///< indices into the input cloud
+  QuadricType detected_type = QuadricType::Invalid;   ///< shape a detector found (CGAL shapes), Invalid otherwise
+};
+
+/// The ground plane and which points belong to it.
+struct GroundSegmentation {
+  std::vector<std::uint32_t> ground_indices;   ///< points on the ground
+  std::vector<std::uint32_t> other_indices;    ///< the remaining candidate points
+  std::vector<float> other_heights;            ///< height of each other_indices point above the ground (its patch plane, else the global plane), m
+  bool found = false;                          ///< whether any ground patch was accepted
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< PCA normal of the ground points near the sensor, pointing up
+  double offset = 0.0;                         ///< plane normal . x + offset = 0
+  int patches_accepted = 0;                    ///< ground patches kept
+  int patches_fitted = 0;                      ///< patches with enough points to test
+};
+
+/// Everything an extraction returns.
+struct ExtractionResult {
+  ExtractionStatus status = ExtractionStatus::Ok;  ///< outcome
+  std::string message;                             ///< why, for non-ok statuses
+  std::vector<Element> elements;                   ///< the key elements (ground first when found)
+  bool has_ground = false;                         ///< whether a ground was found
+  Eigen::Vector3d ground_normal = Eigen::Vector3d::UnitZ();  ///< unit normal of the ground, pointing up
+  double ground_offset = 0.0;                      ///< ground plane normal . x + offset = 0
+  std::size_t points_in_range = 0;                 ///< points kept by the range limits
+  std::map<std::string, double> timings_ms;        ///< per-stage wall times
+};
+
+/// Ground segmentation of the points `candidates` (indices into `points`), paper step 1(a).
+GroundSegmentation segment_ground(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
+                                  const GroundOptions& options, const Eigen::Vector3d& sensor_origin,
+                                  const Eigen::Vector3d& up);
+
+/// Plane extraction on `candidates`, paper step 1(b). Returns Plane elements; `remaining` gets the
+/// candidates not in any plane.
+std::vector<Element> extract_planes(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
+                                    const PlaneOptions& options, std::vector<std::uint32_t>& remaining);
+
+/// Euclidean clusters of `candidates` (connected components at options.radius), sizes within
+/// [minimum_points, maximum_points], largest first. Extent and ground-height filters are not applied here.
+std::vector<std::vector<std::uint32_t>> euclidean_clusters(const Eigen::Matrix3Xd& points,
+                                                           const std::vector<std::uint32_t>& candidates,
+                                                           const ClusterOptions& options);
+
+/// RANSAC lines in one cluster, paper step 1(c). Returns Line elements; `remaining` gets the cluster
+/// points not on a line.
+std::vector<Element> extract_lines(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
+                                   const LineOptions& options, const Eigen::Vector3d& up,
+                                   std::vector<std::uint32_t>& remaining);
+
+/// CGAL Efficient RANSAC shapes (static scans). `normals` may be empty: they are then estimated
+/// with CGAL jet fitting and oriented toward options.sensor_origin.
+ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals,
+                               const ExtractionOptions& options);
+
+/// Element class of a SemanticKITTI label id (lower 16 bits): car 10, bicycle 11, motorcycle 15,
+/// truck 18, other-vehicle 20 (and moving 252-259) -> Vehicle; road 40, parking 44, sidewalk 48,
+/// other-ground 49, terrain 72 -> Ground; building 50, fence 51, other-structure 52 -> Plane;
+/// vegetation 70 -> Vegetation; trunk 71 -> Trunk; pole 80, traffic-sign 81 -> Line.
+/// Returns false for the rest (unlabelled, outlier, person, bicyclist, other-object ...), which are ignored.
+bool element_class_for_semantic_kitti_label(std::uint32_t label, ElementClass& element_class);
+
+/// Whole extraction of a cloud (paper §"Quadric Extraction"). In Labels mode `labels` holds one
+/// SemanticKITTI label per point (else Error naming the counts); in Cluster mode it is ignored.
+/// Degenerate input gives a status, never an exception.
+ExtractionResult extract_elements(const PointCloud& cloud, const ExtractionOptions& options,
+                                  const std::vector<std::uint32_t>& labels = {});
+
+}  // namespace quadrix

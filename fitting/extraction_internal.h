@@ -1,0 +1,85 @@
+// Helpers shared by the extraction translation units (not installed, not part of the API).
+#pragma once
+
+#include "fitting/extraction.h"
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+namespace quadrix::detail {
+
+/// Milliseconds since `start`.
+inline double elapsed_ms(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// Running first and second moments of a point set (for incremental PCA).
+struct Moments {
+  double count = 0.0;                                  ///< number of points
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();       ///< sum of x
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();     ///< sum of x x^T
+
+  /// Adds one point.
+  void add(const Eigen::Vector3d& x) {
+    count += 1.0;
+    sum += x;
+    outer.noalias() += x * x.transpose();
+  }
+  /// Adds another moment set.
+  void add(const Moments& other) {
+    count += other.count;
+    sum += other.sum;
+    outer += other.outer;
+  }
+  /// Mean of the points.
+  Eigen::Vector3d mean() const { return sum / count; }
+  /// Covariance (population) of the points.
+  Eigen::Matrix3d covariance() const {
+    const Eigen::Vector3d m = mean();
+    Eigen::Matrix3d c = outer / count - m * m.transpose();
+    return 0.5 * (c + c.transpose());
+  }
+};
+
+/// Eigen decomposition of a covariance, eigenvalues ascending (clamped at 0), eigenvectors as columns.
+struct Principal {
+  Eigen::Vector3d values = Eigen::Vector3d::Zero();       ///< ascending
+  Eigen::Matrix3d vectors = Eigen::Matrix3d::Identity();  ///< column i belongs to values(i)
+};
+
+/// PCA of a covariance matrix.
+inline Principal principal_axes(const Eigen::Matrix3d& covariance) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(covariance);
+  Principal result;
+  result.values = solver.eigenvalues().cwiseMax(0.0);
+  result.vectors = solver.eigenvectors();
+  return result;
+}
+
+/// Gathers the columns `indices` of `points`.
+inline Eigen::Matrix3Xd gather_points(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& indices) {
+  Eigen::Matrix3Xd out(3, static_cast<Eigen::Index>(indices.size()));
+  for (std::size_t i = 0; i < indices.size(); ++i) out.col(static_cast<Eigen::Index>(i)) = points.col(indices[i]);
+  return out;
+}
+
+/// Hash key of an integer voxel coordinate (21 bits per axis, offset so negatives work).
+inline std::uint64_t voxel_key(std::int64_t x, std::int64_t y, std::int64_t z) {
+  constexpr std::int64_t offset = 1 << 20;
+  constexpr std::uint64_t mask = (1u << 21) - 1u;
+  return ((static_cast<std::uint64_t>(x + offset) & mask) << 42) | ((static_cast<std::uint64_t>(y + offset) & mask) << 21) |
+         (static_cast<std::uint64_t>(z + offset) & mask);
+}
+
+/// CGAL Shape_detection region growing of planes on `candidates` (k nearest neighbours, PCA
+/// normals); defined in cgal_shape_detection.cpp. Returns the point-index sets of the regions.
+std::vector<std::vector<std::uint32_t>> cgal_region_growing_planes(const Eigen::Matrix3Xd& points,
+                                                                   const std::vector<std::uint32_t>& candidates,
+                                                                   const PlaneOptions& options);
+
+}  // namespace quadrix::detail

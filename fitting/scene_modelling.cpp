@@ -1,0 +1,245 @@
+// Quadric scene modelling (paper §"Quadric Fitting" and §"Quadric Modeling"): fit each element as
+// its class's type, complete attributes (Eq. (full attributes) via make_quadric_record), keep the
+// top-K_e per class by size V_a, augment sparse scenes with voxel points (+ FPFH descriptors, PCL).
+#include "fitting/scene_modelling.h"
+#include "fitting/extraction_internal.h"
+
+#include "geometry/error.h"
+
+#include <pcl/features/fpfh_omp.h>
+#include <pcl/features/normal_3d_omp.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+namespace quadrix {
+
+double record_size(const QuadricRecord& record, QuadricType type) {
+  int axes = 3;
+  switch (type) {
+    case QuadricType::Point: return 0.0;
+    case QuadricType::Line: axes = 1; break;
+    case QuadricType::Plane: axes = 2; break;
+    default: axes = 3; break;
+  }
+  double size = 1.0;
+  for (int axis = 0; axis < axes; ++axis) size *= record.full_scale(axis);
+  return size;
+}
+
+std::string modelling_status_name(ModellingStatus status) {
+  return status == ModellingStatus::Ok ? "ok" : "empty";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct FittedElement {
+  bool ok = false;
+  QuadricRecord record;
+  QuadricType type = QuadricType::Invalid;
+  double size = 0.0;
+  std::string message;
+};
+
+// FPFH (Rusu et al. 2009) of the augmented points, computed on the cloud down-sampled at
+// descriptor_surface_voxel (support surface) with normals from a radius neighbourhood.
+std::vector<std::array<float, kFpfhSize>> fpfh_descriptors(const Eigen::Matrix3Xd& points,
+                                                           const Eigen::Matrix3Xd& keypoints,
+                                                           const ModellingOptions& options) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr surface(new pcl::PointCloud<pcl::PointXYZ>);
+  {
+    std::unordered_map<std::uint64_t, std::size_t> slot;
+    std::vector<detail::Moments> cells;
+    const double inverse = 1.0 / options.descriptor_surface_voxel;
+    for (Eigen::Index i = 0; i < points.cols(); ++i) {
+      const Eigen::Vector3i c((points.col(i) * inverse).array().floor().cast<int>());
+      auto [it, inserted] = slot.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()), cells.size());
+      if (inserted) cells.emplace_back();
+      cells[it->second].add(points.col(i));
+    }
+    surface->reserve(cells.size());
+    for (const auto& cell : cells) {
+      const Eigen::Vector3d m = cell.mean();
+      surface->push_back(pcl::PointXYZ(static_cast<float>(m.x()), static_cast<float>(m.y()), static_cast<float>(m.z())));
+    }
+  }
+  pcl::PointCloud<pcl::PointXYZ>::Ptr queries(new pcl::PointCloud<pcl::PointXYZ>);
+  for (Eigen::Index i = 0; i < keypoints.cols(); ++i)
+    queries->push_back(pcl::PointXYZ(static_cast<float>(keypoints(0, i)), static_cast<float>(keypoints(1, i)),
+                                     static_cast<float>(keypoints(2, i))));
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
+  pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>);
+  pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> normal_estimation(2);
+  normal_estimation.setInputCloud(surface);
+  normal_estimation.setSearchMethod(tree);
+  normal_estimation.setRadiusSearch(options.descriptor_normal_radius);
+  normal_estimation.compute(*normals);
+  pcl::PointCloud<pcl::FPFHSignature33> features;
+  pcl::FPFHEstimationOMP<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fpfh(2);
+  fpfh.setInputCloud(queries);
+  fpfh.setSearchSurface(surface);
+  fpfh.setInputNormals(normals);
+  fpfh.setSearchMethod(tree);
+  fpfh.setRadiusSearch(options.descriptor_radius);
+  fpfh.compute(features);
+  std::vector<std::array<float, kFpfhSize>> descriptors(static_cast<std::size_t>(keypoints.cols()));
+  for (std::size_t i = 0; i < descriptors.size(); ++i)
+    for (int bin = 0; bin < kFpfhSize; ++bin) {
+      const float value = features[i].histogram[bin];
+      descriptors[i][bin] = std::isfinite(value) ? value : 0.0f;  // PCL writes NaN where a point has too few neighbours
+    }
+  return descriptors;
+}
+
+}  // namespace
+
+ModellingResult model_elements(const Eigen::Matrix3Xd& points, const ExtractionResult& extraction,
+                               const ModellingOptions& options) {
+  if (options.quadrics_per_class < 0 || options.augmentation_threshold < 0 || options.augmented_elements_per_class < 0)
+    throw Error("modelling options: K_e, delta_a and K_a must be non-negative");
+  if (!(options.augmentation_voxel > 0.0)) throw Error("modelling option v_a (augmentation_voxel) must be positive");
+  const std::unique_ptr<QuadricFitter> fitter = make_quadric_fitter(options.fitter);
+  ModellingResult result;
+  result.extraction = extraction;
+  SceneModel& model = result.model;
+  model.has_ground = extraction.has_ground;
+  model.ground_normal = extraction.ground_normal;
+  model.ground_offset = extraction.ground_offset;
+  model.timings_ms = extraction.timings_ms;
+  const auto& elements = extraction.elements;
+
+  // Fitting (paper §"Quadric Fitting"): type from the class (or the detector), full attributes from
+  // the statistical pose (paper Eq. (full attributes)).
+  auto stage = Clock::now();
+  std::vector<FittedElement> fitted(elements.size());
+  tbb::parallel_for(std::size_t(0), elements.size(), [&](std::size_t e) {
+    const Element& element = elements[e];
+    const QuadricType type = element.detected_type != QuadricType::Invalid ? element.detected_type
+                                                                            : quadric_type_for_class(element.element_class);
+    const Eigen::Matrix3Xd element_points = detail::gather_points(points, element.point_indices);
+    FittedElement& out = fitted[e];
+    if (element.point_indices.size() < minimum_points_for_type(type)) {
+      out.message = "too few points";
+      return;
+    }
+    const QuadricFit fit = fitter->fit(element_points, Eigen::Matrix3Xd(), type);
+    if (fit.status != FitStatus::Ok || !fit.quadric.matrix().allFinite()) {
+      out.message = fit_status_name(fit.status) + (fit.message.empty() ? "" : ": " + fit.message);
+      return;
+    }
+    const StatisticalPose statistics = statistical_pose(element_points);
+    out.record = make_quadric_record(static_cast<std::uint32_t>(element.element_class), fit.quadric, statistics);
+    bool finite = true;
+    for (const double value : out.record.to_array()) finite = finite && std::isfinite(value);
+    if (!finite) {
+      out.message = "non-finite record";
+      return;
+    }
+    out.type = fit.type;
+    out.size = record_size(out.record, fit.type);
+    out.ok = true;
+  });
+  std::map<std::string, int> failures;
+  for (const FittedElement& f : fitted) {
+    if (f.ok)
+      ++result.elements_fitted;
+    else {
+      ++result.elements_failed;
+      ++failures[f.message];
+    }
+  }
+  model.timings_ms["fitting"] = detail::elapsed_ms(stage);
+
+  // Top-K_e per class by size V_a (paper §"Quadric Modeling").
+  stage = Clock::now();
+  std::map<std::uint32_t, std::vector<int>> by_class;
+  for (int e = 0; e < static_cast<int>(elements.size()); ++e)
+    if (fitted[e].ok) by_class[static_cast<std::uint32_t>(elements[e].element_class)].push_back(e);
+  for (auto& [label, members] : by_class) {
+    std::stable_sort(members.begin(), members.end(), [&](int a, int b) { return fitted[a].size > fitted[b].size; });
+    const std::size_t keep = std::min<std::size_t>(members.size(), static_cast<std::size_t>(options.quadrics_per_class));
+    result.elements_dropped_by_top_k += members.size() - keep;
+    for (std::size_t k = 0; k < keep; ++k) {
+      const int e = members[k];
+      model.records.push_back(fitted[e].record);
+      model.types.push_back(fitted[e].type);
+      model.element_point_counts.push_back(static_cast<std::uint32_t>(elements[e].point_indices.size()));
+      result.record_elements.push_back(e);
+    }
+  }
+  model.augmented_begin = model.records.size();
+  model.timings_ms["selection"] = detail::elapsed_ms(stage);
+
+  // Augmentation when fewer than delta_a quadrics: top-K_a elements per class, voxel-down-sampled at
+  // v_a; each voxel becomes a point-type record at the voxel's mean (statistical pose of its points).
+  stage = Clock::now();
+  if (static_cast<int>(model.records.size()) < options.augmentation_threshold) {
+    Eigen::Matrix3Xd keypoints(3, 0);
+    std::vector<Eigen::Vector3d> centres;
+    for (auto& [label, members] : by_class) {
+      const std::size_t take =
+          std::min<std::size_t>(members.size(), static_cast<std::size_t>(options.augmented_elements_per_class));
+      for (std::size_t k = 0; k < take; ++k) {
+        const int e = members[k];
+        std::unordered_map<std::uint64_t, std::size_t> slot;
+        std::vector<std::vector<std::uint32_t>> voxels;
+        const double inverse = 1.0 / options.augmentation_voxel;
+        for (const std::uint32_t index : elements[e].point_indices) {
+          const Eigen::Vector3i c((points.col(index) * inverse).array().floor().cast<int>());
+          auto [it, inserted] = slot.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()), voxels.size());
+          if (inserted) voxels.emplace_back();
+          voxels[it->second].push_back(index);
+        }
+        for (const auto& voxel : voxels) {
+          const Eigen::Matrix3Xd voxel_points = detail::gather_points(points, voxel);
+          const StatisticalPose statistics = statistical_pose(voxel_points);
+          Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+          pose.translation() = statistics.center;
+          const Quadric point_quadric = Quadric::from_canonical(QuadricType::Point, Eigen::Vector3d::Ones(), pose);
+          model.records.push_back(make_quadric_record(label, point_quadric, statistics));
+          model.types.push_back(QuadricType::Point);
+          model.element_point_counts.push_back(static_cast<std::uint32_t>(voxel.size()));
+          result.record_elements.push_back(e);
+          centres.push_back(statistics.center);
+        }
+      }
+    }
+    if (options.compute_descriptors && !centres.empty()) {
+      keypoints.resize(3, static_cast<Eigen::Index>(centres.size()));
+      for (std::size_t i = 0; i < centres.size(); ++i) keypoints.col(static_cast<Eigen::Index>(i)) = centres[i];
+      model.augmented_descriptors = fpfh_descriptors(points, keypoints, options);
+    }
+  }
+  model.timings_ms["augmentation"] = detail::elapsed_ms(stage);
+
+  if (model.augmented_begin == 0) {
+    result.status = ModellingStatus::Empty;
+    result.message = elements.empty() ? "no elements were extracted" : "no element could be fitted";
+  }
+  if (!extraction.message.empty()) result.message += (result.message.empty() ? "" : "; ") + extraction.message;
+  for (const auto& [reason, count] : failures)
+    result.message += (result.message.empty() ? "" : "; ") + std::to_string(count) + " element(s) not fitted (" + reason + ")";
+  return result;
+}
+
+ModellingResult model_scene(const PointCloud& cloud, const ExtractionOptions& extraction_options,
+                            const ModellingOptions& modelling_options, const std::vector<std::uint32_t>& labels) {
+  const auto start = Clock::now();
+  const ExtractionResult extraction = extract_elements(cloud, extraction_options, labels);
+  const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
+  ModellingResult result = model_elements(points, extraction, modelling_options);
+  result.model.source_point_count = cloud.size();
+  result.model.timings_ms["total"] = detail::elapsed_ms(start);
+  return result;
+}
+
+}  // namespace quadrix

@@ -1,0 +1,386 @@
+// Element extraction (paper §"Quadric Extraction") on synthetic scenes built here with known
+// ground truth: a sloped ground, walls, poles, boxes and ellipsoid bushes sampled LiDAR-like with
+// noise; and a monument-like static scan for CGAL Efficient RANSAC.
+#include "fitting/extraction.h"
+
+#include "geometry/error.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <random>
+#include <set>
+
+namespace quadrix {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Ground of the street scene: z = -1.73 + slope * x (the sensor is 1.73 m above it, KITTI-like).
+constexpr double kSlope = 0.06;  // 3.4 degrees
+double ground_height(double x) { return -1.73 + kSlope * x; }
+
+struct SyntheticStreet {
+  PointCloud cloud;
+  std::vector<int> truth;  // per point: 0 ground, 1.. wall id, 10.. pole id, 20.. box id, 30.. bush id
+};
+
+void add_point(SyntheticStreet& scene, std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& p, int id) {
+  points.push_back(p.cast<float>());
+  scene.truth.push_back(id);
+}
+
+// Sloped ground sampled uniformly in range (density ~ 1/r like a spinning LiDAR), two long walls,
+// three poles (sensor-facing half), two boxes (cars) and two ellipsoid bushes; Gaussian noise.
+SyntheticStreet make_street(std::uint64_t seed, double noise = 0.02) {
+  std::mt19937_64 engine(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, noise);
+  const auto jitter = [&]() { return Eigen::Vector3d(gauss(engine), gauss(engine), gauss(engine)); };
+  SyntheticStreet scene;
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 40000; ++i) {
+    const double r = 2.5 + 47.5 * unit(engine), angle = 2.0 * kPi * unit(engine);
+    const double x = r * std::cos(angle), y = r * std::sin(angle);
+    if (std::abs(y) > 11.8) continue;  // the walls close the street
+    add_point(scene, points, Eigen::Vector3d(x, y, ground_height(x)) + jitter(), 0);
+  }
+  const double wall_y[2] = {12.0, -12.0};
+  for (int wall = 0; wall < 2; ++wall)
+    for (int i = 0; i < 6000; ++i) {
+      const double x = -20.0 + 45.0 * unit(engine), h = 7.0 * unit(engine);
+      add_point(scene, points, Eigen::Vector3d(x, wall_y[wall], ground_height(x) + h) + jitter(), 1 + wall);
+    }
+  const Eigen::Vector2d poles[3] = {{6.0, 7.0}, {18.0, -8.0}, {-9.0, -7.0}};
+  for (int pole = 0; pole < 3; ++pole)
+    for (int i = 0; i < 300; ++i) {
+      const Eigen::Vector2d toward_sensor = -poles[pole].normalized();
+      const double phi = (unit(engine) - 0.5) * kPi, h = 5.0 * unit(engine);
+      const double base = std::atan2(toward_sensor.y(), toward_sensor.x());
+      const Eigen::Vector2d xy = poles[pole] + 0.12 * Eigen::Vector2d(std::cos(base + phi), std::sin(base + phi));
+      add_point(scene, points, Eigen::Vector3d(xy.x(), xy.y(), ground_height(xy.x()) + h) + 0.5 * jitter(), 10 + pole);
+    }
+  const Eigen::Vector2d boxes[2] = {{10.0, -4.0}, {-6.0, 4.5}};
+  for (int box = 0; box < 2; ++box)
+    for (int i = 0; i < 1500; ++i) {
+      // Surface of a 4 x 1.8 x 1.5 m box standing 0.3 m above the ground (a car body).
+      const Eigen::Vector3d size(4.0, 1.8, 1.5);
+      const int face = static_cast<int>(unit(engine) * 5.0);  // no bottom face
+      Eigen::Vector3d local(unit(engine) * size.x(), unit(engine) * size.y(), unit(engine) * size.z());
+      if (face == 0) local.x() = 0.0;
+      if (face == 1) local.x() = size.x();
+      if (face == 2) local.y() = 0.0;
+      if (face == 3) local.y() = size.y();
+      if (face == 4) local.z() = size.z();
+      const Eigen::Vector3d corner(boxes[box].x() - 2.0, boxes[box].y() - 0.9, ground_height(boxes[box].x()) + 0.3);
+      add_point(scene, points, corner + local + jitter(), 20 + box);
+    }
+  const Eigen::Vector2d bushes[2] = {{-15.0, 9.0}, {25.0, 8.0}};
+  for (int bush = 0; bush < 2; ++bush)
+    for (int i = 0; i < 1200; ++i) {
+      Eigen::Vector3d direction(gauss(engine), gauss(engine), gauss(engine));
+      direction.normalize();
+      const Eigen::Vector3d radii(1.5, 1.0, 1.0);
+      const Eigen::Vector3d centre(bushes[bush].x(), bushes[bush].y(), ground_height(bushes[bush].x()) + 1.3);
+      add_point(scene, points, centre + radii.cwiseProduct(direction) + jitter(), 30 + bush);
+    }
+  scene.cloud.positions.resize(3, static_cast<Eigen::Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) scene.cloud.positions.col(static_cast<Eigen::Index>(i)) = points[i];
+  return scene;
+}
+
+int count_class(const ExtractionResult& result, ElementClass element_class) {
+  return static_cast<int>(std::count_if(result.elements.begin(), result.elements.end(),
+                                        [&](const Element& e) { return e.element_class == element_class; }));
+}
+
+// Majority ground-truth id of an element and the fraction of its points carrying it.
+std::pair<int, double> majority_truth(const Element& element, const std::vector<int>& truth) {
+  std::map<int, int> votes;
+  for (const std::uint32_t index : element.point_indices) ++votes[truth[index]];
+  const auto best = std::max_element(votes.begin(), votes.end(), [](auto a, auto b) { return a.second < b.second; });
+  return {best->first, static_cast<double>(best->second) / static_cast<double>(element.point_indices.size())};
+}
+
+TEST(Extraction, PresetsFollowTheReferenceTable) {
+  const ExtractionOptions hdl = extraction_preset("vlp64");
+  EXPECT_DOUBLE_EQ(hdl.minimum_range, 2.0);
+  EXPECT_DOUBLE_EQ(hdl.maximum_range, 80.0);
+  EXPECT_DOUBLE_EQ(hdl.planes.voxel_size, 1.0);
+  EXPECT_DOUBLE_EQ(hdl.planes.merge_distance, 0.20);
+  EXPECT_DOUBLE_EQ(hdl.planes.normal_cosine, 0.95);
+  EXPECT_DOUBLE_EQ(hdl.planes.eigenvalue_ratio, 30.0);
+  EXPECT_EQ(hdl.clusters.minimum_points, 20);
+  EXPECT_DOUBLE_EQ(extraction_preset("vlp16").planes.voxel_size, 1.4);
+  EXPECT_DOUBLE_EQ(extraction_preset("vlp16").planes.eigenvalue_ratio, 16.0);
+  EXPECT_DOUBLE_EQ(extraction_preset("mid360").planes.merge_distance, 0.25);
+  EXPECT_DOUBLE_EQ(extraction_preset("avia").planes.eigenvalue_ratio, 20.0);
+  EXPECT_TRUE(extraction_preset("monument").static_scan);
+  EXPECT_THROW(extraction_preset("hdl128"), Error);
+}
+
+TEST(Extraction, SemanticKittiLabelMapping) {
+  ElementClass element_class;
+  ASSERT_TRUE(element_class_for_semantic_kitti_label(10, element_class));
+  EXPECT_EQ(element_class, ElementClass::Vehicle);
+  ASSERT_TRUE(element_class_for_semantic_kitti_label((7u << 16) | 18u, element_class));  // instance bits ignored
+  EXPECT_EQ(element_class, ElementClass::Vehicle);
+  ASSERT_TRUE(element_class_for_semantic_kitti_label(71, element_class));
+  EXPECT_EQ(element_class, ElementClass::Trunk);
+  ASSERT_TRUE(element_class_for_semantic_kitti_label(70, element_class));
+  EXPECT_EQ(element_class, ElementClass::Vegetation);
+  ASSERT_TRUE(element_class_for_semantic_kitti_label(51, element_class));
+  EXPECT_EQ(element_class, ElementClass::Plane);
+  ASSERT_TRUE(element_class_for_semantic_kitti_label(81, element_class));
+  EXPECT_EQ(element_class, ElementClass::Line);
+  ASSERT_TRUE(element_class_for_semantic_kitti_label(72, element_class));
+  EXPECT_EQ(element_class, ElementClass::Ground);
+  EXPECT_FALSE(element_class_for_semantic_kitti_label(0, element_class));   // unlabelled
+  EXPECT_FALSE(element_class_for_semantic_kitti_label(30, element_class));  // person
+}
+
+TEST(Extraction, SyntheticStreetFindsGroundWallsPolesAndObjects) {
+  for (const std::uint64_t seed : {1u, 2u, 3u}) {
+    SCOPED_TRACE(seed);
+    const SyntheticStreet scene = make_street(seed);
+    const ExtractionResult result = extract_elements(scene.cloud, extraction_preset("vlp64"));
+    ASSERT_EQ(result.status, ExtractionStatus::Ok) << result.message;
+    ASSERT_TRUE(result.has_ground);
+    const Eigen::Vector3d true_normal = Eigen::Vector3d(-kSlope, 0.0, 1.0).normalized();
+    EXPECT_LT(std::acos(std::min(1.0, result.ground_normal.dot(true_normal))) * 180.0 / kPi, 2.0);
+    EXPECT_EQ(count_class(result, ElementClass::Ground), 1);
+    EXPECT_EQ(count_class(result, ElementClass::Plane), 2);
+    EXPECT_EQ(count_class(result, ElementClass::Line), 3);
+    EXPECT_EQ(count_class(result, ElementClass::Object), 4);
+    // Every element is pure (>= 90% one truth id) and of the right kind.
+    std::set<int> found;
+    for (const Element& element : result.elements) {
+      const auto [id, purity] = majority_truth(element, scene.truth);
+      EXPECT_GE(purity, 0.9) << element_class_name(element.element_class) << " element of truth " << id;
+      found.insert(id);
+      if (element.element_class == ElementClass::Ground) EXPECT_EQ(id, 0);
+      if (element.element_class == ElementClass::Plane) EXPECT_TRUE(id == 1 || id == 2) << id;
+      if (element.element_class == ElementClass::Line) EXPECT_TRUE(id >= 10 && id < 13) << id;
+      if (element.element_class == ElementClass::Object) EXPECT_TRUE(id >= 20 && id < 32) << id;
+    }
+    EXPECT_EQ(found.size(), 11u);  // ground, 2 walls, 3 poles, 2 boxes, 2 bushes: each found once
+    // Ground recall: most of the ground points in range are labelled ground.
+    std::size_t ground_truth_points = 0;
+    for (std::size_t i = 0; i < scene.truth.size(); ++i) ground_truth_points += scene.truth[i] == 0;
+    EXPECT_GE(static_cast<double>(result.elements.front().point_indices.size()), 0.9 * ground_truth_points);
+  }
+}
+
+TEST(Extraction, CgalRegionGrowingPlanesAgreeWithVoxelPlanes) {
+  const SyntheticStreet scene = make_street(4);
+  ExtractionOptions options = extraction_preset("vlp64");
+  options.planes.method = PlaneMethod::CgalRegionGrowing;
+  const ExtractionResult result = extract_elements(scene.cloud, options);
+  ASSERT_TRUE(result.has_ground);
+  EXPECT_EQ(count_class(result, ElementClass::Plane), 2);
+  for (const Element& element : result.elements)
+    if (element.element_class == ElementClass::Plane) {
+      const auto [id, purity] = majority_truth(element, scene.truth);
+      EXPECT_TRUE(id == 1 || id == 2) << id;
+      EXPECT_GE(purity, 0.95);
+      EXPECT_GE(element.point_indices.size(), 4000u);  // of 6000 wall points
+    }
+}
+
+TEST(Extraction, GridAndPclClusteringGiveTheSamePartition) {
+  const SyntheticStreet scene = make_street(5);
+  const Eigen::Matrix3Xd points = scene.cloud.positions.cast<double>();
+  std::vector<std::uint32_t> candidates;
+  for (std::uint32_t i = 0; i < scene.truth.size(); ++i)
+    if (scene.truth[i] >= 10) candidates.push_back(i);
+  ClusterOptions grid_options;
+  ClusterOptions pcl_options;
+  pcl_options.method = ClusterMethod::Pcl;
+  const auto grid = euclidean_clusters(points, candidates, grid_options);
+  const auto pcl = euclidean_clusters(points, candidates, pcl_options);
+  EXPECT_EQ(grid.size(), 7u);  // 3 poles, 2 boxes, 2 bushes
+  EXPECT_EQ(grid, pcl);
+}
+
+TEST(Extraction, RansacLineRejectsBlobsAndAcceptsPoles) {
+  std::mt19937_64 engine(11);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Eigen::Matrix3Xd points(3, 400);
+  for (int i = 0; i < 200; ++i) points.col(i) = Eigen::Vector3d(0.05 * gauss(engine), 0.05 * gauss(engine), 0.02 * i);
+  for (int i = 200; i < 400; ++i) points.col(i) = Eigen::Vector3d(5.0 + gauss(engine), gauss(engine), gauss(engine));
+  std::vector<std::uint32_t> pole(200), blob(200), remaining;
+  for (std::uint32_t i = 0; i < 200; ++i) {
+    pole[i] = i;
+    blob[i] = 200 + i;
+  }
+  const LineOptions options;
+  const auto lines = extract_lines(points, pole, options, Eigen::Vector3d::UnitZ(), remaining);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_GE(lines[0].point_indices.size(), 190u);
+  EXPECT_TRUE(extract_lines(points, blob, options, Eigen::Vector3d::UnitZ(), remaining).empty());
+  EXPECT_EQ(remaining.size(), 200u);
+}
+
+TEST(Extraction, UpAxisIsConfigurable) {
+  // The same street with y up (x, y, z) -> (x, z, -y): the ground must still be found.
+  SyntheticStreet scene = make_street(6);
+  Eigen::Matrix3f rotate;
+  rotate << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  scene.cloud.positions = rotate * scene.cloud.positions;
+  ExtractionOptions options = extraction_preset("vlp64");
+  options.up = Eigen::Vector3d::UnitY();
+  const ExtractionResult result = extract_elements(scene.cloud, options);
+  ASSERT_TRUE(result.has_ground);
+  const Eigen::Vector3d true_normal = (rotate.cast<double>() * Eigen::Vector3d(-kSlope, 0.0, 1.0)).normalized();
+  EXPECT_LT(std::acos(std::min(1.0, result.ground_normal.dot(true_normal))) * 180.0 / kPi, 2.0);
+  EXPECT_EQ(count_class(result, ElementClass::Plane), 2);
+  EXPECT_EQ(count_class(result, ElementClass::Line), 3);
+}
+
+TEST(Extraction, DegenerateCloudsGiveAStatusNotACrash) {
+  PointCloud empty;
+  EXPECT_EQ(extract_elements(empty, extraction_preset("vlp64")).status, ExtractionStatus::EmptyCloud);
+
+  // All ground: one element, the ground.
+  PointCloud flat;
+  flat.positions.resize(3, 5000);
+  std::mt19937_64 engine(3);
+  std::uniform_real_distribution<float> unit(-30.0f, 30.0f);
+  for (int i = 0; i < 5000; ++i) flat.positions.col(i) = Eigen::Vector3f(unit(engine), unit(engine), -1.73f);
+  const ExtractionResult ground_only = extract_elements(flat, extraction_preset("vlp64"));
+  EXPECT_EQ(ground_only.status, ExtractionStatus::Ok);
+  ASSERT_EQ(ground_only.elements.size(), 1u);
+  EXPECT_EQ(ground_only.elements[0].element_class, ElementClass::Ground);
+
+  // A single wall and nothing else: no ground, one plane.
+  PointCloud wall;
+  wall.positions.resize(3, 4000);
+  std::uniform_real_distribution<float> height(0.0f, 6.0f);
+  for (int i = 0; i < 4000; ++i) wall.positions.col(i) = Eigen::Vector3f(unit(engine), 8.0f, height(engine));
+  const ExtractionResult wall_only = extract_elements(wall, extraction_preset("vlp64"));
+  EXPECT_EQ(wall_only.status, ExtractionStatus::NoGround) << wall_only.message;
+  EXPECT_FALSE(wall_only.message.empty());
+  EXPECT_EQ(count_class(wall_only, ElementClass::Plane), 1);
+
+  // Labels mode with the wrong number of labels is bad input.
+  ExtractionOptions labelled = extraction_preset("vlp64");
+  labelled.semantic_mode = SemanticMode::Labels;
+  EXPECT_THROW(extract_elements(wall, labelled, std::vector<std::uint32_t>(3, 50)), Error);
+}
+
+TEST(Extraction, LabelsModeUsesTheMapping) {
+  const SyntheticStreet scene = make_street(7);
+  std::vector<std::uint32_t> labels(scene.truth.size());
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const int id = scene.truth[i];
+    labels[i] = id == 0 ? 40u : id < 10 ? 50u : id < 20 ? 80u : id < 30 ? 10u : 70u;  // road, building, pole, car, vegetation
+  }
+  ExtractionOptions options = extraction_preset("vlp64");
+  options.semantic_mode = SemanticMode::Labels;
+  const ExtractionResult result = extract_elements(scene.cloud, options, labels);
+  ASSERT_TRUE(result.has_ground);
+  EXPECT_EQ(count_class(result, ElementClass::Ground), 1);
+  EXPECT_EQ(count_class(result, ElementClass::Plane), 2);
+  EXPECT_EQ(count_class(result, ElementClass::Line), 3);
+  EXPECT_EQ(count_class(result, ElementClass::Vehicle), 2);
+  EXPECT_EQ(count_class(result, ElementClass::Vegetation), 2);
+}
+
+// Monument-like static scan: 3 columns, a floor and a wall, a sphere and a cone, with normals.
+PointCloud make_monument(std::uint64_t seed, int expected_counts[4]) {
+  std::mt19937_64 engine(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, 0.004);
+  std::vector<Eigen::Vector3d> points, normals;
+  const auto add = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+    points.push_back(p + Eigen::Vector3d(gauss(engine), gauss(engine), gauss(engine)));
+    normals.push_back(n.normalized());
+  };
+  const auto dense = [](double area) { return static_cast<int>(area * 150.0); };
+  // Floor 14 x 14 m (z = 0) and a back wall (x = -7, 14 x 6 m).
+  for (int i = 0; i < dense(196.0); ++i) add({-7.0 + 14.0 * unit(engine), -7.0 + 14.0 * unit(engine), 0.0}, {0, 0, 1});
+  for (int i = 0; i < dense(84.0); ++i) add({-7.0, -7.0 + 14.0 * unit(engine), 6.0 * unit(engine)}, {1, 0, 0});
+  // Three columns, radius 0.4 m, 5 m high.
+  const Eigen::Vector2d columns[3] = {{-4.0, -4.0}, {-4.0, 0.0}, {-4.0, 4.0}};
+  for (const auto& column : columns)
+    for (int i = 0; i < dense(2.0 * kPi * 0.4 * 5.0); ++i) {
+      const double angle = 2.0 * kPi * unit(engine);
+      const Eigen::Vector3d radial(std::cos(angle), std::sin(angle), 0.0);
+      add(Eigen::Vector3d(column.x(), column.y(), 5.0 * unit(engine)) + 0.4 * radial, radial);
+    }
+  // A sphere of radius 1.5 m resting on the floor (upper 80% visible).
+  for (int i = 0; i < dense(4.0 * kPi * 2.25); ++i) {
+    Eigen::Vector3d d(gauss(engine), gauss(engine), gauss(engine));
+    d.normalize();
+    if (d.z() < -0.6) continue;
+    add(Eigen::Vector3d(3.0, -3.0, 1.5) + 1.5 * d, d);
+  }
+  // A cone: apex at (3, 3, 3), axis down, half-angle 30 degrees, 2.5 m high.
+  const double tangent = std::tan(30.0 * kPi / 180.0), height = 2.5;
+  for (int i = 0; i < dense(kPi * height * tangent * height / std::cos(30.0 * kPi / 180.0)); ++i) {
+    const double t = height * std::sqrt(unit(engine)), angle = 2.0 * kPi * unit(engine);
+    const Eigen::Vector3d radial(std::cos(angle), std::sin(angle), 0.0), axis(0, 0, -1);
+    add(Eigen::Vector3d(3.0, 3.0, 3.0) + t * axis + t * tangent * radial, radial - tangent * axis);
+  }
+  expected_counts[0] = 2;  // planes (one becomes the ground)
+  expected_counts[1] = 3;  // cylinders
+  expected_counts[2] = 1;  // spheres
+  expected_counts[3] = 1;  // cones
+  PointCloud cloud;
+  cloud.positions.resize(3, static_cast<Eigen::Index>(points.size()));
+  std::vector<float> nx, ny, nz;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    cloud.positions.col(static_cast<Eigen::Index>(i)) = points[i].cast<float>();
+    nx.push_back(static_cast<float>(normals[i].x()));
+    ny.push_back(static_cast<float>(normals[i].y()));
+    nz.push_back(static_cast<float>(normals[i].z()));
+  }
+  cloud.extra_fields["nx"] = nx;
+  cloud.extra_fields["ny"] = ny;
+  cloud.extra_fields["nz"] = nz;
+  return cloud;
+}
+
+int count_type(const ExtractionResult& result, QuadricType type) {
+  return static_cast<int>(std::count_if(result.elements.begin(), result.elements.end(),
+                                        [&](const Element& e) { return e.detected_type == type; }));
+}
+
+TEST(Extraction, MonumentPresetFindsEachShapeTypeWithCgalEfficientRansac) {
+  int expected[4];
+  const PointCloud cloud = make_monument(21, expected);
+  // Statistical acceptance: Efficient RANSAC is randomised; k of n seeds must give exact counts.
+  int exact_runs = 0;
+  for (const std::uint32_t seed : {1u, 2u, 3u}) {
+    ExtractionOptions options = extraction_preset("monument");
+    options.shapes.seed = seed;
+    const ExtractionResult result = extract_elements(cloud, options);
+    EXPECT_TRUE(result.has_ground);
+    EXPECT_EQ(result.elements.front().element_class, ElementClass::Ground);
+    const int planes = count_type(result, QuadricType::Plane), cylinders = count_type(result, QuadricType::CircularCylinder);
+    const int spheres = count_type(result, QuadricType::Sphere), cones = count_type(result, QuadricType::CircularCone);
+    std::cout << "seed " << seed << ": planes " << planes << ", cylinders " << cylinders << ", spheres " << spheres
+              << ", cones " << cones << "\n";
+    exact_runs += planes == expected[0] && cylinders == expected[1] && spheres == expected[2] && cones == expected[3];
+  }
+  EXPECT_GE(exact_runs, 2);
+}
+
+TEST(Extraction, MonumentWithoutNormalsUsesJetNormals) {
+  int expected[4];
+  PointCloud cloud = make_monument(22, expected);
+  cloud.extra_fields.clear();
+  ExtractionOptions options = extraction_preset("monument");
+  options.sensor_origin = Eigen::Vector3d(0.0, 0.0, 1.7);  // one station inside the scene
+  const ExtractionResult result = extract_elements(cloud, options);
+  EXPECT_EQ(count_type(result, QuadricType::CircularCylinder), expected[1]);
+  EXPECT_EQ(count_type(result, QuadricType::Sphere), expected[2]);
+  EXPECT_EQ(count_type(result, QuadricType::CircularCone), expected[3]);
+  EXPECT_GE(count_type(result, QuadricType::Plane), expected[0]);
+}
+
+}  // namespace
+}  // namespace quadrix
