@@ -1,6 +1,9 @@
 // Registry, shared evaluation and small helpers of the QuadricFitter interface.
 #include "fitting/quadric_fitter.h"
 
+#include "fitting/cgal_fitter.h"
+#include "fitting/constrained_fitter.h"
+#include "fitting/learned_fitter.h"
 #include "fitting/statistical_fitter.h"
 #include "fitting/taubin_fitter.h"
 #include "geometry/error.h"
@@ -62,6 +65,10 @@ const std::vector<std::pair<std::string, FitterFactory>>& fitter_registry() {
   static const std::vector<std::pair<std::string, FitterFactory>> registry = {
       {"statistical", [] { return make_statistical_fitter(); }},
       {"taubin", [] { return make_taubin_fitter(); }},
+      {"learned", [] { return make_learned_fitter(); }},
+      {"auto", [] { return make_auto_fitter(); }},
+      {"constrained", [] { return make_constrained_fitter(); }},
+      {"cgal", [] { return make_cgal_fitter(); }},
   };
   return registry;
 }
@@ -101,9 +108,11 @@ double unit_space_algebraic_distance(const Eigen::Matrix3Xd& points, const Quadr
   return sum / static_cast<double>(points.cols());
 }
 
-void evaluate_fit(const Eigen::Matrix3Xd& points, QuadricFit& fit, const DecompositionTolerances& tolerances) {
-  fit.shape = fit.quadric.decompose(tolerances);
-  fit.type = fit.shape.type;
+void evaluate_fit(const Eigen::Matrix3Xd& points, QuadricFit& fit, const DecompositionTolerances& type_tolerances) {
+  // The shape (and so the residuals) is the exact geometry of Q; only the type label uses the
+  // fitter's tolerances, so a nearly-circular ellipse is reported as circular without moving Q.
+  fit.shape = fit.quadric.decompose();
+  fit.type = fit.quadric.decompose(type_tolerances).type;
   double sum_squared = 0.0;
   double largest = 0.0;
   for (Eigen::Index i = 0; i < points.cols(); ++i) {
