@@ -4,7 +4,6 @@
 #include "fitting/cgal_fitter.h"
 #include "fitting/constrained_fitter.h"
 #include "fitting/learned_fitter.h"
-#include "fitting/learned_fitter.h"
 #include "fitting/statistical_fitter.h"
 #include "fitting/taubin_fitter.h"
 #include "geometry/error.h"
@@ -66,8 +65,6 @@ const std::vector<std::pair<std::string, FitterFactory>>& fitter_registry() {
   static const std::vector<std::pair<std::string, FitterFactory>> registry = {
       {"statistical", [] { return make_statistical_fitter(); }},
       {"taubin", [] { return make_taubin_fitter(); }},
-      {"learned", [] { return make_learned_fitter(); }},
-      {"auto", [] { return make_auto_fitter(); }},
       {"learned", [] { return make_learned_fitter(); }},
       {"auto", [] { return make_auto_fitter(); }},
       {"constrained", [] { return make_constrained_fitter(); }},
