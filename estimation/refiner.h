@@ -7,7 +7,8 @@
 //   "nlopt": L-BFGS, SLSQP (gradient = sum rho' J^T w e, exact through the retraction) or the
 //            derivative-free BOBYQA, over a 6-parameter increment delta around the start pose.
 // Before optimising, both check that the factors constrain all 6 DoF (rank of J^T J at the start)
-// and refuse with status Degenerate otherwise, reporting the unconstrained directions.
+// and refuse with status Degenerate otherwise, reporting the unconstrained directions; they check
+// again at the refined pose (a start far from alignment can hide a structural degeneracy).
 #pragma once
 
 #include "estimation/quadric_distance.h"
@@ -31,7 +32,8 @@ enum class RefinementStatus : std::uint8_t {
   Converged,      ///< a stopping tolerance was met
   MaxIterations,  ///< the iteration/evaluation budget ran out first (the pose is the best found)
   Failed,         ///< the backend reported an error (the pose is the start pose)
-  Degenerate,     ///< the factors do not constrain all 6 DoF at the start pose (no optimisation ran)
+  Degenerate,     ///< the factors do not constrain all 6 DoF: at the start pose (no optimisation ran, transform = start)
+                  ///< or at the refined pose (transform = refined, but not unique along weak_directions)
 };
 
 /// Lower-case status name ("converged", "max_iterations", "failed", "degenerate").
@@ -73,7 +75,7 @@ struct RefinementResult {
   double final_cost = 0.0;             ///< F at the returned pose
   double seconds = 0.0;                ///< wall-clock time of the refinement
   std::size_t factor_count = 0;        ///< factors in the problem
-  int constrained_rank = 0;            ///< rank of J^T J at the start pose (6 = fully constrained)
+  int constrained_rank = 0;            ///< rank of J^T J (6 = fully constrained; when Degenerate, at the pose that failed the check)
   std::vector<Vector6d> weak_directions;  ///< unit increments [phi; rho] that J^T J does not constrain
   std::string message;                 ///< backend report or why the problem is degenerate
 };

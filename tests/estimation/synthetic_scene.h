@@ -75,8 +75,9 @@ inline Eigen::Vector3d canonical_scale(QuadricType type, std::mt19937& rng) {
 /// Rotation and translation error of an estimate: (||t - t_true|| metres, angle degrees).
 inline std::pair<double, double> pose_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
   const Eigen::Matrix3d relative = truth.linear().transpose() * estimate.linear();
-  const double cosine = std::clamp((relative.trace() - 1.0) / 2.0, -1.0, 1.0);
-  return {(estimate.translation() - truth.translation()).norm(), std::acos(cosine) * 180.0 / M_PI};
+  // Angle from the quaternion (atan2-based): accurate near zero, unlike acos((tr - 1) / 2).
+  const double angle = Eigen::AngleAxisd(Eigen::Quaterniond(relative).normalized()).angle();
+  return {(estimate.translation() - truth.translation()).norm(), angle * 180.0 / M_PI};
 }
 
 /// A source/target record pair set related by `truth`.
