@@ -41,9 +41,9 @@ std::size_t minimum_points_for_type(QuadricType type);
 /// Everything a fitter returns.
 struct QuadricFit {
   FitStatus status = FitStatus::Failed;             ///< outcome
-  QuadricType type = QuadricType::Invalid;          ///< type of the fitted quadric
+  QuadricType type = QuadricType::Invalid;          ///< type the fitter assigns (may use looser tolerances than shape)
   Quadric quadric;                                  ///< Q (not normalised; decompose() normalises)
-  QuadricDecomposition shape;                       ///< decomposition of Q: scale, rotation, centre, indicators
+  QuadricDecomposition shape;                       ///< exact decomposition of Q: scale, rotation, centre, indicators
   StatisticalPose statistics;                       ///< t_s, R_s, s_s of the points (paper's statistical fit)
   double residual_rms = 0.0;                        ///< RMS orthogonal point-to-surface distance, metres
   double residual_max = 0.0;                        ///< largest orthogonal distance, metres
@@ -72,9 +72,9 @@ std::vector<std::string> quadric_fitter_names();
 /// (the paper's |x^T Q x| / |grad(Q) x| read with a norm in the denominator, after Taubin 1991).
 double unit_space_algebraic_distance(const Eigen::Matrix3Xd& points, const Quadric& quadric);
 
-/// Fills shape (decomposed with `tolerances`), type, residual_rms / residual_max (orthogonal
-/// distances) and algebraic_distance of `fit` from its quadric and the points, so every fitter
-/// reports the same numbers (statistics are the fitter's to fill).
-void evaluate_fit(const Eigen::Matrix3Xd& points, QuadricFit& fit, const DecompositionTolerances& tolerances = {});
+/// Fills shape (exact decomposition of Q), type (Q classified with `type_tolerances`),
+/// residual_rms / residual_max (orthogonal distances to the exact shape) and algebraic_distance of
+/// `fit`, so every fitter reports the same numbers (statistics are the fitter's to fill).
+void evaluate_fit(const Eigen::Matrix3Xd& points, QuadricFit& fit, const DecompositionTolerances& type_tolerances = {});
 
 }  // namespace quadrix

@@ -118,9 +118,16 @@ class TaubinFitter final : public QuadricFitter {
     result.quadric = Quadric(to_unit.transpose() * unit.matrix() * to_unit);
     result.status = FitStatus::Ok;
     evaluate_fit(points, result, options_.type_tolerances);
-    if (result.status == FitStatus::Ok && hint && !same_family(*hint, result.type)) {
-      result.status = FitStatus::TypeMismatch;
-      result.message = "asked for a " + quadric_type_name(*hint) + ", the algebraic fit is a " + quadric_type_name(result.type);
+    // With a hint, the fit answers it when either the exact type of Q or its tolerant reading is of
+    // the hinted family (a long exact ellipsoid reads as a cylinder under the loose zero tolerance).
+    if (result.status == FitStatus::Ok && hint) {
+      if (same_family(*hint, result.shape.type)) {
+        result.type = result.shape.type;
+      } else if (!same_family(*hint, result.type)) {
+        result.status = FitStatus::TypeMismatch;
+        result.message = "asked for a " + quadric_type_name(*hint) + ", the algebraic fit is a " +
+                         quadric_type_name(result.type) + " (exactly: " + quadric_type_name(result.shape.type) + ")";
+      }
     }
     return finish(result);
   }
