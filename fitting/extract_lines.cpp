@@ -68,9 +68,10 @@ std::vector<Element> extract_lines(const Eigen::Matrix3Xd& points, const std::ve
     }
     std::vector<std::uint32_t> on_line, off_line;
     double lowest = 1e300, highest = -1e300;
+    const double membership = std::max(options.inlier_distance, options.membership_distance);
     for (const std::uint32_t index : remaining) {
       const Eigen::Vector3d x = points.col(index);
-      if (distance_to_line(best, x) <= options.inlier_distance) {
+      if (distance_to_line(best, x) <= membership) {
         on_line.push_back(index);
         const double s = (x - best.point).dot(best.direction);
         lowest = std::min(lowest, s);

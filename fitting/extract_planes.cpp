@@ -22,15 +22,13 @@ struct Voxel {
   int region = -1;                       // region id while growing
 };
 
-// Second-largest statistical scale of a point set: the in-plane width of a plane.
-double second_scale(const detail::Moments& moments) {
-  const detail::Principal axes = detail::principal_axes(moments.covariance());
-  return kStatisticalScaleFactor * std::sqrt(axes.values(1));
-}
-
+// Width (second statistical scale) and area proxy (product of the two largest) of a plane.
 bool plane_is_large_enough(const detail::Moments& moments, std::size_t voxels, const PlaneOptions& options) {
-  return moments.count >= options.minimum_plane_points && static_cast<int>(voxels) >= options.minimum_plane_voxels &&
-         second_scale(moments) >= options.minimum_plane_extent;
+  if (moments.count < options.minimum_plane_points || static_cast<int>(voxels) < options.minimum_plane_voxels) return false;
+  const detail::Principal axes = detail::principal_axes(moments.covariance());
+  const double length = kStatisticalScaleFactor * std::sqrt(axes.values(2));
+  const double width = kStatisticalScaleFactor * std::sqrt(axes.values(1));
+  return width >= options.minimum_plane_width && length * width >= options.minimum_plane_area;
 }
 
 std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
@@ -68,6 +66,7 @@ std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const 
 
   std::vector<Element> planes;
   std::vector<char> in_plane(voxels.size(), 0);
+  std::vector<int> plane_regions;  // region id of each accepted plane
   int region_id = 0;
   for (const int seed : planar_order) {
     if (voxels[seed].region >= 0) continue;
@@ -109,10 +108,42 @@ std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const 
       plane.point_indices.insert(plane.point_indices.end(), voxels[id].members.begin(), voxels[id].members.end());
     }
     planes.push_back(std::move(plane));
+    plane_regions.push_back(region);
+  }
+  // Point-level completion: points of non-planar voxels touching a plane (wall bottoms, edges,
+  // voxels split by a boundary) join it when they lie within the merge distance of its final plane.
+  std::unordered_map<std::uint32_t, char> absorbed;
+  for (std::size_t p = 0; p < planes.size(); ++p) {
+    detail::Moments moments;
+    for (const std::uint32_t index : planes[p].point_indices) moments.add(points.col(index));
+    const Eigen::Vector3d normal = detail::principal_axes(moments.covariance()).vectors.col(0);
+    const Eigen::Vector3d center = moments.mean();
+    std::vector<int> touched;
+    for (std::size_t id = 0; id < voxels.size(); ++id) {
+      if (!in_plane[id] || voxels[id].region != plane_regions[p]) continue;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const Eigen::Vector3i c = voxels[id].coordinate + Eigen::Vector3i(dx, dy, dz);
+            const auto it = voxel_of_key.find(detail::voxel_key(c.x(), c.y(), c.z()));
+            if (it != voxel_of_key.end() && !in_plane[it->second]) touched.push_back(it->second);
+          }
+    }
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    for (const int id : touched)
+      for (const std::uint32_t index : voxels[id].members) {
+        if (absorbed.count(index) != 0) continue;
+        if (std::abs(normal.dot(points.col(index) - center)) > options.merge_distance) continue;
+        absorbed[index] = 1;
+        planes[p].point_indices.push_back(index);
+      }
   }
   remaining.clear();
   for (std::size_t id = 0; id < voxels.size(); ++id)
-    if (!in_plane[id]) remaining.insert(remaining.end(), voxels[id].members.begin(), voxels[id].members.end());
+    if (!in_plane[id])
+      for (const std::uint32_t index : voxels[id].members)
+        if (absorbed.count(index) == 0) remaining.push_back(index);
   return planes;
 }
 

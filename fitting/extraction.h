@@ -79,7 +79,8 @@ struct PlaneOptions {
   int minimum_voxel_points = 8;        ///< voxels with fewer points are not tested
   int minimum_plane_points = 80;       ///< planes with fewer points are returned to clustering
   int minimum_plane_voxels = 2;        ///< planes spanning fewer voxels are returned to clustering
-  double minimum_plane_extent = 1.5;   ///< second-largest statistical scale of a plane at least this, m
+  double minimum_plane_width = 0.5;    ///< second-largest statistical scale s_s,2 of a plane at least this, m
+  double minimum_plane_area = 2.0;     ///< product of the two largest statistical scales s_s,1 s_s,2 (the plane's V_a) at least this, m^2
   int cgal_neighbours = 12;            ///< CgalRegionGrowing: k nearest neighbours for normals and growing
 };
 
@@ -95,7 +96,8 @@ struct ClusterOptions {
 
 /// RANSAC lines on clusters (paper: "RANSAC is applied to detect lines").
 struct LineOptions {
-  double inlier_distance = 0.12;       ///< point-to-line distance for inliers, m
+  double inlier_distance = 0.12;       ///< point-to-line distance for RANSAC inliers, m
+  double membership_distance = 0.25;   ///< points this close to an accepted (refined) line join it: the pole's thickness, m
   int iterations = 100;                ///< RANSAC hypotheses per line
   int minimum_points = 15;             ///< inliers a line needs
   double minimum_length = 1.2;         ///< extent of the inliers along the line, m

@@ -27,7 +27,7 @@ struct ModellingOptions {
   bool compute_descriptors = true;       ///< compute FPFH descriptors of augmented points (PCL)
   double descriptor_normal_radius = 1.0; ///< normal estimation radius for FPFH, m (2 v_a)
   double descriptor_radius = 2.5;        ///< FPFH support radius, m (5 v_a)
-  double descriptor_surface_voxel = 0.25;///< the cloud is down-sampled at this voxel for the FPFH support surface, m
+  double descriptor_surface_voxel = 0.5; ///< the cloud is down-sampled at this voxel (v_a) for the FPFH support surface, m
 };
 
 /// Size V_a of a record (paper §"Quadric Modeling"): product of the first n full scales, n = 1 for
