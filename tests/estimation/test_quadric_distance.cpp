@@ -186,7 +186,9 @@ TEST(QuadricDistance, BuildFactorsAugmentsFiltersAndAddsTheGround) {
   EXPECT_EQ(plain.factors.size(), 6u + 8u);
   for (const QuadricFactor& factor : plain.factors) {
     EXPECT_LT(quadric_distance(factor, scene.truth).norm(), 1e-7);  // samples lie on the centre line/plane
-    if (factor.kind == FactorKind::Augmented) EXPECT_EQ(factor.rotation_mask, Eigen::Vector3d::Zero());
+    if (factor.kind == FactorKind::Augmented) {
+      EXPECT_EQ(factor.rotation_mask, Eigen::Vector3d::Zero());
+    }
   }
   // Each augmented sample sits at the mean full scale from the full centre.
   for (const QuadricFactor& factor : plain.factors) {
