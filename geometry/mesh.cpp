@@ -296,7 +296,11 @@ TriangleMesh mesh_surface(const QuadricDecomposition& shape, const LocalExtent& 
     const Eigen::Vector3d p1 = canonical_mesh.vertices.col(triangle[1]);
     const Eigen::Vector3d p2 = canonical_mesh.vertices.col(triangle[2]);
     const Eigen::Vector3d normal = (p1 - p0).cross(p2 - p0);
-    if (normal.norm() <= area_floor) continue;
+    // Collapsed rows (poles, apex) leave slivers and needles: zero area outright, or area tiny
+    // against the longest edge, where the facet's orientation is rounding noise.
+    const double longest_edge_squared =
+        std::max({(p1 - p0).squaredNorm(), (p2 - p1).squaredNorm(), (p0 - p2).squaredNorm()});
+    if (normal.norm() <= area_floor || normal.norm() <= 1e-9 * longest_edge_squared) continue;
     const bool all_inside = line_tube ? true : (inside(extent, p0, slack) && inside(extent, p1, slack) && inside(extent, p2, slack));
     if (!all_inside) continue;
     if (normal.dot(outward(shape, canonical, (p0 + p1 + p2) / 3.0)) < 0.0) std::swap(triangle[1], triangle[2]);
