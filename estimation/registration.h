@@ -1,0 +1,147 @@
+// The whole registration pipeline (paper §"Registration overview", §"Quadric Matching",
+// §"Quadric-based 6-DoF Transformation Estimation", Algorithm 1): model both clouds with quadrics,
+// establish putative correspondences, build the multi-level compatibility graphs, find the graduated
+// maximum cliques I*_1..K_g, estimate one candidate per level (SVD initialisation, then refinement of
+// the degeneracy-aware quadric distance with the f_pp filter against the estimated ground normal and
+// correspondence augmentation), and select T* by the robust quadric distance D_v.
+//
+// A wrong or unsure answer is a status, never a silent transform: `degenerate` when no candidate has
+// at least 3 inlier correspondences that constrain all 6 DoF, `ambiguous` when the best and the
+// second-best candidates disagree strongly while their scores are close, `failed` when nothing could
+// be scored.
+#pragma once
+
+#include "estimation/candidate_selection.h"
+#include "estimation/refiner.h"
+#include "fitting/extraction.h"
+#include "fitting/scene_model.h"
+#include "fitting/scene_modelling.h"
+#include "geometry/point_cloud.h"
+#include "matching/compatibility_graph.h"
+#include "matching/correspondences.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace quadrix {
+
+/// Outcome of a registration.
+enum class RegistrationStatus : std::uint8_t {
+  Ok,          ///< a well-supported candidate won clearly
+  Ambiguous,   ///< best and second-best candidates disagree strongly and score almost equally
+  Degenerate,  ///< fewer than 3 inlier correspondences, or the factors do not constrain all 6 DoF
+  Failed,      ///< no candidate could be estimated or scored
+};
+
+/// Lower-case status name ("ok", "ambiguous", "degenerate", "failed").
+const char* registration_status_name(RegistrationStatus status);
+
+/// Options of the estimation half (Algorithm 1, transformation candidate estimation).
+struct EstimationOptions {
+  std::string refiner = "ceres";              ///< Refiner registry name (LMOptimizer of Algorithm 1): "ceres" | "nlopt"
+  RefinerOptions refinement;                  ///< LM, 300 iterations, tolerance 1e-8 (published defaults)
+  double manhattan_tolerance_degrees = 10.0;  ///< δ_g of f_pp in refinement, degrees (published 10)
+  bool augment_non_central = true;            ///< Augment(): samples on linear / planar centres (paper: yes)
+  bool use_ground_constraint = true;          ///< add the ground plane-to-plane factor when both clouds have a ground
+  double ground_weight = 1.0;                 ///< w of the ground factor
+  std::size_t minimum_inliers = 3;            ///< a candidate needs at least this many clique correspondences (paper: 3)
+};
+
+/// Thresholds of the `ambiguous` status.
+struct AmbiguityOptions {
+  double score_ratio = 0.85;                  ///< D_v(best) / D_v(second) above this counts as "scores close"
+  double translation_disagreement = 2.0;      ///< candidates farther apart than this disagree, m (success rule: 2 m)
+  double rotation_disagreement_degrees = 5.0; ///< or rotated more than this apart, degrees (success rule: 5 deg)
+};
+
+/// Every option of register_clouds; defaults are the paper's (§"Implementation Details").
+struct RegistrationOptions {
+  ExtractionOptions source_extraction;        ///< extraction of the source cloud (sensor preset)
+  ExtractionOptions target_extraction;        ///< extraction of the target cloud (sensor preset; may differ: cross-sensor)
+  ModellingOptions modelling;                 ///< K_e = 50, delta_a = 60, K_a = 10, v_a = 0.5 m
+  CorrespondenceOptions correspondences;      ///< K_s = 20, augmented points by FPFH
+  CompatibilityGraphOptions graphs;           ///< δ_m = [0.2, 0.4, 0.6, 0.8] m
+  double clique_time_limit_ms = 2000.0;       ///< deadline of the whole graduated clique search, ms (released code: 3.6e6)
+  int clique_threads = 1;                     ///< threads of the clique solver (0: hardware concurrency)
+  EstimationOptions estimation;               ///< candidate estimation
+  SelectionOptions selection;                 ///< Φ = 0.5 DCS, δ_g^e = 5 deg (ground normals are filled in by the pipeline)
+  AmbiguityOptions ambiguity;                 ///< when the answer is reported as ambiguous
+};
+
+/// One transformation candidate T_k (one per clique level).
+struct RegistrationCandidate {
+  std::size_t level = 0;                      ///< index k of the compatibility graph level
+  double threshold = 0.0;                     ///< δ_m^k of that level, m
+  std::size_t clique_size = 0;                ///< |I*_k|
+  Eigen::Isometry3d initial = Eigen::Isometry3d::Identity();    ///< T^0_k = SVD(R_x, R_y, I*_k)
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< T_k after refinement
+  std::string refinement_status;              ///< refinement_status_name, or "skipped" (too few inliers / SVD degenerate)
+  std::size_t factor_count = 0;               ///< factors in the refinement (correspondences + augmented + ground)
+  std::size_t filtered_count = 0;             ///< clique correspondences removed by f_pp
+  double refinement_cost = 0.0;               ///< final refinement cost F(T_k)
+  bool valid = false;                         ///< enough inliers and all 6 DoF constrained: takes part in selection
+  CandidateScore score;                       ///< D_v(T_k) and its counts (score inf when not valid)
+  std::string note;                           ///< why the candidate is not valid (empty when valid)
+};
+
+/// Counts reported by a registration.
+struct RegistrationCounts {
+  std::size_t source_points = 0;              ///< points of the source cloud
+  std::size_t target_points = 0;              ///< points of the target cloud
+  std::size_t source_elements = 0;            ///< extracted elements of the source
+  std::size_t target_elements = 0;            ///< extracted elements of the target
+  std::size_t source_quadrics = 0;            ///< fitted quadrics kept in the source model
+  std::size_t target_quadrics = 0;            ///< fitted quadrics kept in the target model
+  std::size_t source_augmented_points = 0;    ///< augmented points of the source model
+  std::size_t target_augmented_points = 0;    ///< augmented points of the target model
+  std::size_t correspondences = 0;            ///< putative correspondences |I|
+  std::size_t quadric_correspondences = 0;    ///< of which between fitted quadrics
+  std::size_t augmented_correspondences = 0;  ///< of which between augmented points (FPFH)
+  std::vector<std::size_t> clique_sizes;      ///< |I*_k| per level
+};
+
+/// Everything register_clouds returns.
+struct RegistrationResult {
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< T*: maps source points into the target frame (identity unless ok/ambiguous)
+  RegistrationStatus status = RegistrationStatus::Failed;       ///< see RegistrationStatus
+  std::string message;                                          ///< why, for any status but ok; a short summary otherwise
+  std::size_t best_candidate = 0;                               ///< index of T* in `candidates`
+  std::vector<RegistrationCandidate> candidates;                ///< every candidate with its score, in level order
+  double best_to_second_ratio = 0.0;                            ///< D_v(best) / D_v(second best valid); 0 with fewer than 2
+  RegistrationCounts counts;                                    ///< counts of every stage
+  /// Wall times in ms: "modelling_source", "modelling_target", "correspondences", "graphs", "cliques",
+  /// "estimation", "selection", and "total" (this call, modelling included).
+  std::map<std::string, double> timings_ms;
+  SceneModel source_model;                                      ///< R_x
+  SceneModel target_model;                                      ///< R_y
+};
+
+/// Registers two already-modelled scenes (everything after modelling: correspondences, graphs,
+/// cliques, Algorithm 1). `counts` source/target points and elements are left 0; timings have no
+/// modelling entries. The models are copied into the result.
+RegistrationResult register_models(const SceneModel& source, const SceneModel& target,
+                                   const RegistrationOptions& options = {});
+
+/// Registers `source` onto `target` (paper Fig. overview): model_scene on both clouds with their
+/// extraction options, then register_models. Optional per-point SemanticKITTI labels switch that
+/// side to the labels semantic mode. Degenerate input (empty clouds, one wall) gives a status.
+RegistrationResult register_clouds(const PointCloud& source, const PointCloud& target,
+                                   const RegistrationOptions& options = {},
+                                   const std::vector<std::uint32_t>& source_labels = {},
+                                   const std::vector<std::uint32_t>& target_labels = {});
+
+/// Relative translation error ||t - t_gt||, metres (paper's RTE).
+double translation_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);
+/// Relative rotation error arccos((tr(R^T R_gt) - 1) / 2), degrees (paper's RRE), accurate near 0.
+double rotation_error_degrees(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);
+/// The paper's success rule: RTE <= 2 m and RRE <= 5 deg.
+bool registration_succeeded(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth,
+                            double max_translation = 2.0, double max_rotation_degrees = 5.0);
+
+}  // namespace quadrix
