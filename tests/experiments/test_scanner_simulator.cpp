@@ -248,7 +248,7 @@ TEST(Simulation, EveryScenePatternPutsPointsOnPrimitives) {
   for (const std::string& scene_name : scene_names()) {
     const Scene scene = make_scene(scene_name, 2);
     const RayCaster caster(scene);
-    for (const std::string& sensor_name : {"vlp16", "livox"}) {
+    for (const char* sensor_name : {"vlp16", "livox"}) {
       SensorModel sensor = sensor_preset(sensor_name);
       sensor.range_noise_sigma = 0.0;
       const SimulatedScan scan = simulate_scan(scene, caster, sensor, scene.default_lidar_poses[1], 2, 1);

@@ -161,10 +161,13 @@ TEST(Extraction, SyntheticStreetFindsGroundWallsPolesAndObjects) {
       const auto [id, purity] = majority_truth(element, scene.truth);
       EXPECT_GE(purity, 0.9) << element_class_name(element.element_class) << " element of truth " << id;
       found.insert(id);
-      if (element.element_class == ElementClass::Ground) EXPECT_EQ(id, 0);
-      if (element.element_class == ElementClass::Plane) EXPECT_TRUE(id == 1 || id == 2) << id;
-      if (element.element_class == ElementClass::Line) EXPECT_TRUE(id >= 10 && id < 13) << id;
-      if (element.element_class == ElementClass::Object) EXPECT_TRUE(id >= 20 && id < 32) << id;
+      switch (element.element_class) {
+        case ElementClass::Ground: EXPECT_EQ(id, 0); break;
+        case ElementClass::Plane: EXPECT_TRUE(id == 1 || id == 2) << id; break;
+        case ElementClass::Line: EXPECT_TRUE(id >= 10 && id < 13) << id; break;
+        case ElementClass::Object: EXPECT_TRUE(id >= 20 && id < 32) << id; break;
+        default: break;
+      }
     }
     EXPECT_EQ(found.size(), 10u);  // ground, 2 walls, 3 poles, 2 boxes, 2 bushes: each found once
     // Ground recall: most of the ground points in range are labelled ground.
