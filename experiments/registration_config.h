@@ -1,0 +1,65 @@
+// Registration presets and YAML configuration (DESIGN.md §6): the C++ option structs hold the
+// defaults (paper values); a preset is extraction_preset(name) plus those defaults; YAML files
+// (experiments/presets/<name>.yaml, or --config FILE) override fields. Unknown keys are an Error
+// naming the key and the file. `auto` chooses a preset from measurable properties of the cloud.
+#pragma once
+
+#include "estimation/registration.h"
+#include "geometry/point_cloud.h"
+
+#include <string>
+#include <vector>
+
+namespace quadrix {
+
+/// Names accepted by registration_preset: vlp64, vlp16, mid360, avia, monument.
+std::vector<std::string> registration_preset_names();
+
+/// Paper defaults with the extraction preset `name` on both sides (C++ values only, no file read).
+/// Throws quadrix::Error listing the valid names otherwise.
+RegistrationOptions registration_preset(const std::string& name);
+
+/// Folder of the preset YAML files: $QUADRIX_PRESETS_DIR if set, else experiments/presets of the source tree.
+std::string registration_presets_directory();
+
+/// Applies the YAML file `path` to `options` (both sides' extraction unless `side` is "source" or
+/// "target"). Schema (every key optional):
+///   sensor: vlp64|vlp16|mid360|avia|monument   (restarts the extraction from that preset)
+///   extraction: {minimum_range, maximum_range, static_scan, up: [x,y,z],
+///                ground: {inlier_distance, max_slope_deg, max_step_height},
+///                planes: {voxel_size, merge_distance, normal_cosine, eigenvalue_ratio, minimum_plane_points},
+///                clusters: {radius, minimum_points, maximum_points, maximum_extent},
+///                lines: {inlier_distance, minimum_points, minimum_length},
+///                shapes: {simplification_voxel, epsilon, cluster_epsilon, minimum_points, normal_threshold}}
+///   modelling: {fitter, quadrics_per_class, augmentation_threshold, augmented_elements_per_class, augmentation_voxel}
+///   matching: {top_k_similar, match_augmented_points, thresholds: [..], clique_time_limit_ms, clique_threads}
+///   estimation: {refiner, max_iterations, function_tolerance, manhattan_tolerance_degrees,
+///                augment_non_central, use_ground_constraint, ground_weight, minimum_inliers}
+///   selection: {dcs_phi, manhattan_tolerance_degrees}
+///   ambiguity: {score_ratio, translation_disagreement, rotation_disagreement_degrees}
+/// Throws quadrix::Error naming the file and the key for unknown keys, wrong types or unreadable files.
+void apply_registration_config(const std::string& path, RegistrationOptions& options, const std::string& side = "both");
+
+/// The preset `name` as the user sees it: registration_preset(name), then its YAML file from
+/// registration_presets_directory() when present (its values mirror the C++ ones; edits take effect).
+RegistrationOptions load_registration_preset(const std::string& name);
+
+/// Measured properties of a cloud behind the `auto` preset.
+struct SensorGuess {
+  std::string preset;                 ///< chosen preset name
+  std::string reason;                 ///< one line: the measurements and the rule that chose it
+  std::size_t point_count = 0;        ///< points of the cloud
+  double azimuth_coverage = 0.0;      ///< fraction of 1-degree azimuth bins (around the origin) holding points
+  int ring_count = 0;                 ///< separated elevation bands (0.05 deg bins) of points beyond 3 m: the laser rings
+  double elevation_span_degrees = 0.0;///< 1st..99th percentile of the elevation angle, degrees
+  double median_range = 0.0;          ///< median distance from the origin, m
+};
+
+/// Chooses among the presets by the cloud itself: narrow horizontal field of view (< 50% azimuth
+/// coverage) -> avia; more than 1.5 M points -> monument (static scan); >= 48 rings -> vlp64;
+/// 8..47 rings -> vlp16; no separated rings: elevation span >= 35 deg -> mid360, else a spinning
+/// scanner whose rings blur (beam offsets): >= 60 k points -> vlp64, fewer -> vlp16. The origin is
+/// assumed to be the sensor; the up axis is +z (not estimated).
+SensorGuess guess_sensor_preset(const PointCloud& cloud);
+
+}  // namespace quadrix

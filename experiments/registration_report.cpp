@@ -1,0 +1,216 @@
+// report.json, merged.ply and bev.png of a registration (see registration_report.h).
+#include "experiments/registration_report.h"
+
+#include "geometry/error.h"
+#include "geometry/io.h"
+
+#include <nlohmann/json.hpp>
+
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb/stb_image_write.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <ostream>
+#include <vector>
+
+namespace quadrix {
+namespace {
+
+nlohmann::json matrix_json(const Eigen::Isometry3d& transform) {
+  nlohmann::json rows = nlohmann::json::array();
+  const Eigen::Matrix4d matrix = transform.matrix();
+  for (int r = 0; r < 4; ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int c = 0; c < 4; ++c) row.push_back(matrix(r, c));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// JSON has no infinity: unscored candidates get null.
+nlohmann::json number_or_null(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
+
+// 3x5 pixel glyphs of the digits and 'm' for the scale-bar label (rows top to bottom, 3 bits each).
+const std::array<std::array<std::uint8_t, 5>, 11> kGlyphs = {{
+    {7, 5, 5, 5, 7}, {2, 6, 2, 2, 7}, {7, 1, 7, 4, 7}, {7, 1, 7, 1, 7}, {5, 5, 7, 1, 1}, {7, 4, 7, 1, 7},
+    {7, 4, 7, 5, 7}, {7, 1, 1, 1, 1}, {7, 5, 7, 5, 7}, {7, 5, 7, 1, 7}, {0, 0, 7, 7, 5},
+}};
+
+struct Canvas {
+  int size = 0;
+  std::vector<std::uint8_t> pixels;  // RGB
+  void set(int x, int y, std::array<std::uint8_t, 3> color) {
+    if (x < 0 || y < 0 || x >= size || y >= size) return;
+    std::uint8_t* pixel = &pixels[3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(size) + static_cast<std::size_t>(x))];
+    pixel[0] = color[0];
+    pixel[1] = color[1];
+    pixel[2] = color[2];
+  }
+  void fill(int x0, int y0, int x1, int y1, std::array<std::uint8_t, 3> color) {
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) set(x, y, color);
+  }
+  // Draws `text` (digits and 'm') with glyph pixels of `scale` image pixels; returns the end x.
+  int text(int x, int y, const std::string& text, int scale, std::array<std::uint8_t, 3> color) {
+    for (const char c : text) {
+      const int glyph = c == 'm' ? 10 : (c >= '0' && c <= '9' ? c - '0' : -1);
+      if (glyph >= 0)
+        for (int row = 0; row < 5; ++row)
+          for (int column = 0; column < 3; ++column)
+            if (kGlyphs[static_cast<std::size_t>(glyph)][static_cast<std::size_t>(row)] & (4 >> column))
+              fill(x + column * scale, y + row * scale, x + (column + 1) * scale - 1, y + (row + 1) * scale - 1, color);
+      x += 4 * scale;
+    }
+    return x;
+  }
+};
+
+}  // namespace
+
+std::string registration_report_json(const RegistrationResult& result, const RegistrationReportContext& context) {
+  nlohmann::json report;
+  report["transform"] = matrix_json(result.transform);
+  report["status"] = registration_status_name(result.status);
+  report["message"] = result.message;
+  nlohmann::json timings;
+  timings["total"] = context.total_ms;
+  timings["load"] = context.load_ms;
+  for (const auto& [stage, ms] : result.timings_ms) timings[stage == "total" ? "registration" : stage] = ms;
+  report["timings_ms"] = timings;
+  const RegistrationCounts& c = result.counts;
+  report["counts"] = {{"source_points", c.source_points},
+                      {"target_points", c.target_points},
+                      {"source_elements", c.source_elements},
+                      {"target_elements", c.target_elements},
+                      {"source_quadrics", c.source_quadrics},
+                      {"target_quadrics", c.target_quadrics},
+                      {"source_augmented_points", c.source_augmented_points},
+                      {"target_augmented_points", c.target_augmented_points},
+                      {"correspondences", c.correspondences},
+                      {"quadric_correspondences", c.quadric_correspondences},
+                      {"augmented_correspondences", c.augmented_correspondences},
+                      {"clique_sizes", c.clique_sizes}};
+  nlohmann::json candidates = nlohmann::json::array();
+  for (std::size_t i = 0; i < result.candidates.size(); ++i) {
+    const RegistrationCandidate& candidate = result.candidates[i];
+    const bool selected = (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) &&
+                          i == result.best_candidate;
+    candidates.push_back({{"level", candidate.level},
+                          {"threshold_m", candidate.threshold},
+                          {"clique_size", candidate.clique_size},
+                          {"refinement_status", candidate.refinement_status},
+                          {"valid", candidate.valid},
+                          {"selected", selected},
+                          {"score", number_or_null(candidate.score.score)},
+                          {"pair_count", candidate.score.pair_count},
+                          {"filtered_count", candidate.score.filtered_count},
+                          {"term_count", candidate.score.term_count},
+                          {"factor_count", candidate.factor_count},
+                          {"refinement_filtered_count", candidate.filtered_count},
+                          {"refinement_cost", number_or_null(candidate.refinement_cost)},
+                          {"transform", matrix_json(candidate.transform)},
+                          {"note", candidate.note}});
+  }
+  report["candidates"] = candidates;
+  report["best_to_second_ratio"] = number_or_null(result.best_to_second_ratio);
+  report["input"] = {{"source", context.source_path},
+                     {"target", context.target_path},
+                     {"source_preset", context.source_preset},
+                     {"target_preset", context.target_preset},
+                     {"preset_notes", context.preset_notes}};
+  if (context.ground_truth) {
+    report["ground_truth"] = {{"transform", matrix_json(*context.ground_truth)},
+                              {"rte_m", translation_error(result.transform, *context.ground_truth)},
+                              {"rre_deg", rotation_error_degrees(result.transform, *context.ground_truth)},
+                              {"success", registration_succeeded(result.transform, *context.ground_truth)}};
+  }
+  return report.dump(2) + "\n";
+}
+
+void write_registration_report(const std::string& path, const RegistrationResult& result,
+                               const RegistrationReportContext& context) {
+  const std::string text = registration_report_json(result, context);
+  write_file_atomically(path, [&text](std::ostream& out) { out << text; });
+}
+
+PointCloud merge_aligned_clouds(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform) {
+  PointCloud merged;
+  const Eigen::Index target_count = static_cast<Eigen::Index>(target.size());
+  const Eigen::Index source_count = static_cast<Eigen::Index>(source.size());
+  merged.positions.resize(3, target_count + source_count);
+  merged.positions.leftCols(target_count) = target.positions;
+  merged.positions.rightCols(source_count) = (transform * source.positions.cast<double>()).cast<float>();
+  merged.colors.assign(target.size(), {160, 160, 160});
+  merged.colors.resize(target.size() + source.size(), {255, 120, 0});
+  merged.labels.assign(target.size(), 0);
+  merged.labels.resize(target.size() + source.size(), 1);
+  return merged;
+}
+
+void write_birds_eye_png(const std::string& path, const PointCloud& source, const PointCloud& target,
+                         const Eigen::Isometry3d& transform, const BirdsEyeOptions& options) {
+  if (options.image_size < 64 || options.image_size > 16384)
+    throw Error("write_birds_eye_png: image_size must be within 64..16384 pixels, got " + std::to_string(options.image_size));
+  double half_extent = options.half_extent;
+  if (!(half_extent > 0.0)) {
+    std::vector<float> horizontal;
+    horizontal.reserve(target.size());
+    for (Eigen::Index i = 0; i < target.positions.cols(); ++i)
+      horizontal.push_back(std::hypot(target.positions(0, i), target.positions(1, i)));
+    half_extent = 50.0;
+    if (!horizontal.empty()) {
+      const std::size_t k = horizontal.size() * 95 / 100;
+      std::nth_element(horizontal.begin(), horizontal.begin() + static_cast<std::ptrdiff_t>(k), horizontal.end());
+      half_extent = std::clamp(static_cast<double>(horizontal[k]), 20.0, 100.0);
+    }
+  }
+  Canvas canvas;
+  canvas.size = options.image_size;
+  canvas.pixels.assign(3 * static_cast<std::size_t>(canvas.size) * static_cast<std::size_t>(canvas.size), 255);
+  const double pixels_per_metre = canvas.size / (2.0 * half_extent);
+  const auto plot = [&](const Eigen::Vector3d& p, std::array<std::uint8_t, 3> color) {
+    if (options.max_height > 0.0 && p.z() > options.max_height) return;
+    const int x = static_cast<int>(std::floor((p.x() + half_extent) * pixels_per_metre));
+    const int y = static_cast<int>(std::floor((half_extent - p.y()) * pixels_per_metre));
+    canvas.set(x, y, color);
+  };
+  for (std::size_t i = 0; i < target.size(); ++i) plot(target.point(i), {150, 150, 150});
+  for (std::size_t i = 0; i < source.size(); ++i) plot(transform * source.point(i), {235, 100, 0});
+  // Target origin cross.
+  const int centre = canvas.size / 2;
+  canvas.fill(centre - 6, centre - 1, centre + 6, centre + 1, {0, 0, 200});
+  canvas.fill(centre - 1, centre - 6, centre + 1, centre + 6, {0, 0, 200});
+  // Scale bar: the largest of 1/2/5 x 10^k metres not longer than a fifth of the image.
+  const double longest = 0.2 * 2.0 * half_extent;
+  double bar = std::pow(10.0, std::floor(std::log10(longest)));
+  for (const double factor : {5.0, 2.0})
+    if (bar * factor <= longest) {
+      bar *= factor;
+      break;
+    }
+  const int bar_pixels = static_cast<int>(std::lround(bar * pixels_per_metre));
+  const int margin = canvas.size / 32;
+  const int thickness = std::max(3, canvas.size / 256);
+  const int base = canvas.size - margin;
+  canvas.fill(margin, base - thickness, margin + bar_pixels, base, {0, 0, 0});
+  canvas.fill(margin, base - 4 * thickness, margin + thickness - 1, base, {0, 0, 0});
+  canvas.fill(margin + bar_pixels - thickness + 1, base - 4 * thickness, margin + bar_pixels, base, {0, 0, 0});
+  const int glyph_scale = std::max(2, canvas.size / 256);
+  canvas.text(margin, base - 4 * thickness - 7 * glyph_scale, std::to_string(static_cast<long long>(std::lround(bar))) + "m",
+              glyph_scale, {0, 0, 0});
+  std::vector<std::uint8_t> png;
+  const auto append = [](void* context, void* data, int size) {
+    auto* bytes = static_cast<std::vector<std::uint8_t>*>(context);
+    bytes->insert(bytes->end(), static_cast<std::uint8_t*>(data), static_cast<std::uint8_t*>(data) + size);
+  };
+  if (stbi_write_png_to_func(append, &png, canvas.size, canvas.size, 3, canvas.pixels.data(), canvas.size * 3) == 0)
+    throw file_error(path, "PNG encoding failed");
+  write_file_atomically(path, [&png](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  });
+}
+
+}  // namespace quadrix

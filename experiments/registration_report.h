@@ -1,0 +1,58 @@
+// What `quadrix register --out DIR` writes: report.json (the contract: "transform", "status",
+// "timings_ms" with "total" and one entry per stage, "counts", "candidates"), merged.ply (target
+// grey, transformed source coloured) and bev.png (bird's-eye picture of the aligned clouds).
+#pragma once
+
+#include "estimation/registration.h"
+#include "geometry/point_cloud.h"
+
+#include <Eigen/Geometry>
+
+#include <map>
+#include <optional>
+#include <string>
+
+namespace quadrix {
+
+/// Context of a run that the report records beside the RegistrationResult.
+struct RegistrationReportContext {
+  std::string source_path;                        ///< source cloud file
+  std::string target_path;                        ///< target cloud file
+  std::string source_preset;                      ///< preset used for the source (with "auto: ..." reasons in preset_notes)
+  std::string target_preset;                      ///< preset used for the target
+  std::string preset_notes;                       ///< how the presets were chosen (auto measurements), free text
+  double load_ms = 0.0;                           ///< time to read both files, ms
+  double total_ms = 0.0;                          ///< files loaded -> transform: reading + register_clouds, ms
+  std::optional<Eigen::Isometry3d> ground_truth;  ///< T_gt mapping source into target, when known
+};
+
+/// The report as a JSON document (pretty-printed). Keys: "transform" (4x4 row-major list of lists),
+/// "status", "message", "timings_ms" ("total" = context.total_ms, "load", then every stage of the
+/// result: modelling_source, modelling_target, correspondences, graphs, cliques, estimation,
+/// selection, "registration" = register_clouds' own total), "counts", "candidates" (one object per
+/// level: level, threshold_m, clique_size, refinement_status, valid, selected, score, pair_count,
+/// filtered_count, term_count, factor_count, transform, note), "best_to_second_ratio", "input"
+/// (paths and presets), and with a ground truth "ground_truth" {transform, rte_m, rre_deg, success}.
+std::string registration_report_json(const RegistrationResult& result, const RegistrationReportContext& context);
+
+/// Writes registration_report_json atomically to `path`.
+void write_registration_report(const std::string& path, const RegistrationResult& result,
+                               const RegistrationReportContext& context);
+
+/// The merged cloud: target points grey (160,160,160), source points transformed by `transform`
+/// and coloured orange (255,120,0); the `labels` field marks the side (0 target, 1 source).
+PointCloud merge_aligned_clouds(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform);
+
+/// Options of the bird's-eye picture.
+struct BirdsEyeOptions {
+  int image_size = 1024;        ///< width = height of the square image, pixels
+  double half_extent = 0.0;     ///< half side of the pictured square around the target origin, m (0: 95th percentile of target horizontal range, 20..100 m)
+  double max_height = 0.0;      ///< points higher than this above the target origin are left out, m (0: keep all); roofs hide streets
+};
+
+/// Writes a PNG seen from above (x right, y up): white background, target grey, transformed source
+/// orange, a scale bar with its length in metres (bottom left), the target origin as a cross. Atomic.
+void write_birds_eye_png(const std::string& path, const PointCloud& source, const PointCloud& target,
+                         const Eigen::Isometry3d& transform, const BirdsEyeOptions& options = {});
+
+}  // namespace quadrix

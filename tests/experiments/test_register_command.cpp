@@ -1,0 +1,204 @@
+// Registration presets/config (YAML mirrors C++, unknown keys are errors naming key and file), the
+// `auto` preset on real scans, and the report files of `quadrix register --out`.
+#include "experiments/registration_config.h"
+#include "experiments/registration_report.h"
+#include "geometry/error.h"
+#include "geometry/io.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace quadrix {
+namespace {
+
+std::filesystem::path temporary_folder(const std::string& name) {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / ("quadrix_test_register_" + name);
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  return folder;
+}
+
+std::string write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(RegistrationConfig, PresetFilesMirrorTheCxxPresets) {
+  for (const std::string& name : registration_preset_names()) {
+    const RegistrationOptions cxx = registration_preset(name);
+    const std::string file = registration_presets_directory() + "/" + name + ".yaml";
+    ASSERT_TRUE(std::filesystem::exists(file)) << file;
+    RegistrationOptions yaml = RegistrationOptions{};  // defaults + the file (its `sensor` restarts the extraction)
+    apply_registration_config(file, yaml);
+    for (const ExtractionOptions* side : {&yaml.source_extraction, &yaml.target_extraction}) {
+      EXPECT_EQ(side->preset, cxx.source_extraction.preset) << file;
+      EXPECT_EQ(side->static_scan, cxx.source_extraction.static_scan) << file;
+      EXPECT_DOUBLE_EQ(side->minimum_range, cxx.source_extraction.minimum_range) << file;
+      EXPECT_DOUBLE_EQ(side->maximum_range, cxx.source_extraction.maximum_range) << file;
+      EXPECT_DOUBLE_EQ(side->planes.voxel_size, cxx.source_extraction.planes.voxel_size) << file;
+      EXPECT_DOUBLE_EQ(side->planes.merge_distance, cxx.source_extraction.planes.merge_distance) << file;
+      EXPECT_DOUBLE_EQ(side->planes.normal_cosine, cxx.source_extraction.planes.normal_cosine) << file;
+      EXPECT_DOUBLE_EQ(side->planes.eigenvalue_ratio, cxx.source_extraction.planes.eigenvalue_ratio) << file;
+      EXPECT_DOUBLE_EQ(side->clusters.radius, cxx.source_extraction.clusters.radius) << file;
+      EXPECT_EQ(side->clusters.minimum_points, cxx.source_extraction.clusters.minimum_points) << file;
+    }
+    EXPECT_EQ(yaml.modelling.quadrics_per_class, cxx.modelling.quadrics_per_class);
+    EXPECT_EQ(yaml.modelling.augmentation_threshold, cxx.modelling.augmentation_threshold);
+    EXPECT_EQ(yaml.correspondences.top_k_similar, cxx.correspondences.top_k_similar);
+    EXPECT_EQ(yaml.graphs.thresholds, cxx.graphs.thresholds);
+    EXPECT_EQ(yaml.estimation.refiner, cxx.estimation.refiner);
+    EXPECT_EQ(yaml.estimation.refinement.max_iterations, cxx.estimation.refinement.max_iterations);
+    EXPECT_DOUBLE_EQ(yaml.estimation.refinement.function_tolerance, cxx.estimation.refinement.function_tolerance);
+    EXPECT_DOUBLE_EQ(yaml.estimation.manhattan_tolerance_degrees, cxx.estimation.manhattan_tolerance_degrees);
+    EXPECT_DOUBLE_EQ(yaml.selection.dcs_phi, cxx.selection.dcs_phi);
+    EXPECT_DOUBLE_EQ(yaml.selection.manhattan_tolerance_degrees, cxx.selection.manhattan_tolerance_degrees);
+  }
+}
+
+TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
+  const std::filesystem::path folder = temporary_folder("config");
+  const std::string good = write_text(folder / "good.yaml",
+                                      "sensor: vlp16\nextraction:\n  planes:\n    voxel_size: 2.5\n"
+                                      "matching:\n  thresholds: [0.3, 0.9]\nestimation:\n  refiner: nlopt\n");
+  RegistrationOptions options = registration_preset("vlp64");
+  apply_registration_config(good, options, "target");
+  EXPECT_EQ(options.source_extraction.preset, "vlp64");
+  EXPECT_DOUBLE_EQ(options.source_extraction.planes.voxel_size, 1.0);
+  EXPECT_EQ(options.target_extraction.preset, "vlp16");
+  EXPECT_DOUBLE_EQ(options.target_extraction.planes.voxel_size, 2.5);
+  EXPECT_EQ(options.graphs.thresholds, (std::vector<double>{0.3, 0.9}));
+  EXPECT_EQ(options.estimation.refiner, "nlopt");
+
+  const auto expect_error_naming = [&](const std::string& file_name, const std::string& text, const std::string& needle) {
+    const std::string path = write_text(folder / file_name, text);
+    RegistrationOptions ignored;
+    try {
+      apply_registration_config(path, ignored);
+      ADD_FAILURE() << "no error for " << text;
+    } catch (const Error& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(path), std::string::npos) << message;
+      EXPECT_NE(message.find(needle), std::string::npos) << message;
+    }
+  };
+  expect_error_naming("unknown_top.yaml", "colour: red\n", "'colour'");
+  expect_error_naming("unknown_nested.yaml", "extraction:\n  planes:\n    voxle_size: 1\n", "'extraction.planes.voxle_size'");
+  expect_error_naming("bad_type.yaml", "modelling:\n  quadrics_per_class: many\n", "'modelling.quadrics_per_class'");
+  expect_error_naming("bad_sensor.yaml", "sensor: hdl999\n", "'sensor'");
+  expect_error_naming("bad_thresholds.yaml", "matching:\n  thresholds: [0.5, 0.2]\n", "'matching.thresholds'");
+  expect_error_naming("bad_refiner.yaml", "estimation:\n  refiner: gauss\n", "'estimation.refiner'");
+  RegistrationOptions ignored;
+  EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
+  EXPECT_THROW(registration_preset("hdl999"), Error);
+}
+
+TEST(RegistrationConfig, AutoPresetChoosesFromMeasuredCloudProperties) {
+  // A synthetic 16-ring spinning scan and a synthetic 70-degree non-repetitive scan.
+  PointCloud rings;
+  PointCloud narrow;
+  std::vector<Eigen::Vector3f> ring_points;
+  for (int ring = 0; ring < 16; ++ring)
+    for (int step = 0; step < 1800; ++step) {
+      const double elevation = (-15.0 + 2.0 * ring) * M_PI / 180.0;
+      const double azimuth = step * 2.0 * M_PI / 1800.0;
+      const double range = 20.0 + 5.0 * std::sin(3.0 * azimuth);
+      ring_points.emplace_back(range * std::cos(elevation) * std::cos(azimuth), range * std::cos(elevation) * std::sin(azimuth),
+                               range * std::sin(elevation));
+    }
+  rings.positions.resize(3, static_cast<Eigen::Index>(ring_points.size()));
+  for (std::size_t i = 0; i < ring_points.size(); ++i) rings.positions.col(static_cast<Eigen::Index>(i)) = ring_points[i];
+  EXPECT_EQ(guess_sensor_preset(rings).preset, "vlp16") << guess_sensor_preset(rings).reason;
+  EXPECT_EQ(guess_sensor_preset(rings).ring_count, 16);
+
+  narrow.positions.resize(3, 20000);
+  for (int i = 0; i < 20000; ++i) {
+    const double azimuth = (-35.0 + 70.0 * ((i * 7919) % 20000) / 20000.0) * M_PI / 180.0;
+    const double elevation = (-35.0 + 70.0 * ((i * 104729) % 20000) / 20000.0) * M_PI / 180.0;
+    narrow.positions.col(i) = Eigen::Vector3f(static_cast<float>(30.0 * std::cos(elevation) * std::cos(azimuth)),
+                                              static_cast<float>(30.0 * std::cos(elevation) * std::sin(azimuth)),
+                                              static_cast<float>(30.0 * std::sin(elevation)));
+  }
+  EXPECT_EQ(guess_sensor_preset(narrow).preset, "avia") << guess_sensor_preset(narrow).reason;
+  EXPECT_EQ(guess_sensor_preset(PointCloud{}).preset, "vlp64");
+}
+
+TEST(RegistrationConfig, AutoPresetOnRealScans) {
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/000000.bin");
+  const SensorGuess kitti = guess_sensor_preset(read_point_cloud(testing::shared_data_path("kitti00/velodyne/000000.bin")));
+  std::printf("kitti 000000: %s\n", kitti.reason.c_str());
+  EXPECT_EQ(kitti.preset, "vlp64") << kitti.reason;
+  for (const auto& [file, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"quadricsreg_demo/vlp16_source.ply", "vlp16"}, {"quadricsreg_demo/avia_source.ply", "avia"},
+           {"quadricsreg_demo/mid360_source.ply", "mid360"}}) {
+    if (!std::filesystem::exists(testing::shared_data_path(file))) continue;
+    const SensorGuess guess = guess_sensor_preset(read_point_cloud(testing::shared_data_path(file)));
+    std::printf("%s: %s\n", file.c_str(), guess.reason.c_str());
+    EXPECT_EQ(guess.preset, expected) << file << ": " << guess.reason;
+  }
+}
+
+TEST(RegistrationReport, JsonFollowsTheContractAndPicturesAreWritten) {
+  RegistrationResult result;
+  result.status = RegistrationStatus::Ok;
+  result.transform = Eigen::Isometry3d::Identity();
+  result.transform.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
+  result.timings_ms = {{"modelling_source", 10.0}, {"modelling_target", 11.0}, {"correspondences", 1.0}, {"graphs", 0.5},
+                       {"cliques", 0.4}, {"estimation", 3.0}, {"selection", 0.2}, {"total", 26.1}};
+  result.counts.correspondences = 42;
+  result.counts.clique_sizes = {5, 7};
+  RegistrationCandidate first;
+  first.score.score = std::numeric_limits<double>::infinity();  // unscored -> null
+  RegistrationCandidate second;
+  second.level = 1;
+  second.valid = true;
+  second.score.score = 0.25;
+  second.transform = result.transform;
+  result.candidates = {first, second};
+  result.best_candidate = 1;
+  RegistrationReportContext context;
+  context.total_ms = 40.0;
+  context.load_ms = 13.9;
+  context.ground_truth = Eigen::Isometry3d::Identity();
+
+  const nlohmann::json report = nlohmann::json::parse(registration_report_json(result, context));
+  ASSERT_EQ(report["transform"].size(), 4u);
+  EXPECT_DOUBLE_EQ(report["transform"][1][3].get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(report["transform"][3][3].get<double>(), 1.0);
+  EXPECT_EQ(report["status"], "ok");
+  EXPECT_DOUBLE_EQ(report["timings_ms"]["total"].get<double>(), 40.0);
+  for (const char* stage : {"load", "modelling_source", "modelling_target", "correspondences", "graphs", "cliques",
+                            "estimation", "selection", "registration"})
+    EXPECT_TRUE(report["timings_ms"].contains(stage)) << stage;
+  EXPECT_EQ(report["counts"]["correspondences"], 42);
+  ASSERT_EQ(report["candidates"].size(), 2u);
+  EXPECT_TRUE(report["candidates"][0]["score"].is_null());
+  EXPECT_TRUE(report["candidates"][1]["selected"].get<bool>());
+  EXPECT_NEAR(report["ground_truth"]["rte_m"].get<double>(), std::sqrt(14.0), 1e-12);
+  EXPECT_TRUE(report["ground_truth"]["success"].is_boolean());
+
+  PointCloud source;
+  source.positions = Eigen::Matrix3Xf::Random(3, 500) * 20.0f;
+  PointCloud target = source;
+  const std::filesystem::path folder = temporary_folder("report");
+  write_registration_report((folder / "report.json").string(), result, context);
+  write_birds_eye_png((folder / "bev.png").string(), source, target, result.transform);
+  const PointCloud merged = merge_aligned_clouds(source, target, result.transform);
+  ASSERT_EQ(merged.size(), 1000u);
+  EXPECT_TRUE(merged.positions.col(500).isApprox(source.positions.col(0) + Eigen::Vector3f(1, 2, 3)));
+  EXPECT_EQ(merged.colors[0], (std::array<std::uint8_t, 3>{160, 160, 160}));
+  write_point_cloud((folder / "merged.ply").string(), merged);
+  std::ifstream png(folder / "bev.png", std::ios::binary);
+  char magic[8] = {};
+  png.read(magic, 8);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+  EXPECT_TRUE(std::filesystem::exists(folder / "report.json"));
+  EXPECT_EQ(read_point_cloud((folder / "merged.ply").string()).size(), 1000u);
+}
+
+}  // namespace
+}  // namespace quadrix
