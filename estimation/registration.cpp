@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <new>
 #include <sstream>
 
 namespace quadrix {
@@ -218,7 +219,15 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
     selection.source_ground_normal = source.ground_normal;
     selection.target_ground_normal = target.ground_normal;
   }
-  const SelectionResult selected = select_candidate(source.records, target.records, valid_transforms, selection);
+  SelectionResult selected;
+  try {
+    selected = select_candidate(source.records, target.records, valid_transforms, selection);
+  } catch (const std::bad_alloc&) {
+    // SNN enumerates every same-label source/target pair; huge augmented models can exhaust memory.
+    result.timings_ms["selection"] = elapsed_ms(stage);
+    return finish(RegistrationStatus::Failed, "candidate selection ran out of memory (" + std::to_string(source.size()) +
+                                                  " source and " + std::to_string(target.size()) + " target records)");
+  }
   result.timings_ms["selection"] = elapsed_ms(stage);
   for (std::size_t k = 0; k < valid_indices.size(); ++k) {
     CandidateScore score = selected.scores[k];

@@ -281,22 +281,16 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
   } else if (guess.point_count > 1500000) {
     guess.preset = "monument";
     reason << "more than 1.5 M points: static scan, monument";
-  } else if (guess.ring_count >= 48) {
-    guess.preset = "vlp64";
-    reason << ">= 48 rings: vlp64";
-  } else if (guess.ring_count >= 8) {
-    guess.preset = "vlp16";
-    reason << "8..47 rings: vlp16";
-  } else if (guess.elevation_span_degrees >= 35.0) {
+  } else if (guess.ring_count >= 8 || guess.elevation_span_degrees < 35.0) {
+    // A spinning multi-beam scanner (separated rings, or rings blurred by per-beam offsets within a
+    // narrow elevation span); its density tells a 64-beam from a 16-beam head.
+    const bool dense = guess.point_count >= 60000 || guess.ring_count >= 48;
+    guess.preset = dense ? "vlp64" : "vlp16";
+    reason << (guess.ring_count >= 8 ? "ring structure" : "narrow elevation span (< 35 deg)") << " of a spinning scanner, "
+           << (dense ? ">= 60 k points or >= 48 rings: vlp64" : "< 60 k points: vlp16");
+  } else {
     guess.preset = "mid360";
     reason << "no ring structure, 360 deg coverage and a tall (>= 35 deg) elevation span: mid360";
-  } else if (guess.point_count >= 60000) {
-    // Rings blurred by per-beam offsets (HDL-64E: 0.4 deg spacing) fill the elevation bins.
-    guess.preset = "vlp64";
-    reason << "no separated rings but a narrow elevation span and >= 60 k points (dense spinning scanner): vlp64";
-  } else {
-    guess.preset = "vlp16";
-    reason << "no separated rings, narrow elevation span, < 60 k points (sparse spinning scanner): vlp16";
   }
   guess.reason = reason.str();
   return guess;

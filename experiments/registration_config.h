@@ -56,10 +56,10 @@ struct SensorGuess {
 };
 
 /// Chooses among the presets by the cloud itself: narrow horizontal field of view (< 50% azimuth
-/// coverage) -> avia; more than 1.5 M points -> monument (static scan); >= 48 rings -> vlp64;
-/// 8..47 rings -> vlp16; no separated rings: elevation span >= 35 deg -> mid360, else a spinning
-/// scanner whose rings blur (beam offsets): >= 60 k points -> vlp64, fewer -> vlp16. The origin is
-/// assumed to be the sensor; the up axis is +z (not estimated).
+/// coverage) -> avia; more than 1.5 M points -> monument (static scan); a spinning multi-beam scanner
+/// (>= 8 separated rings, or an elevation span < 35 deg where beam offsets blur the rings) ->
+/// vlp64 when dense (>= 60 k points or >= 48 rings), else vlp16; otherwise (no rings, tall field of
+/// view) -> mid360. The origin is assumed to be the sensor; the up axis is +z (not estimated).
 SensorGuess guess_sensor_preset(const PointCloud& cloud);
 
 }  // namespace quadrix
