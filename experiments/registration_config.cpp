@@ -249,15 +249,18 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
     const double low = elevations[elevations.size() / 100];
     const double high = elevations[elevations.size() * 99 / 100];
     guess.elevation_span_degrees = high - low;
-    // Rings: maximal runs of occupied 0.05-degree bins separated by empty bins (a bin is occupied
-    // when it holds more than 0.02% of these points); a non-repetitive scanner fills the span.
-    const double bin_width = 0.05;
+    // Rings: maximal runs of occupied elevation bins (0.05 deg, wider for sparse clouds) separated by empty bins. A bin is occupied
+    // when it holds more than half the mean count per bin: ring bins hold many times the mean, while a
+    // non-repetitive scanner fills the span evenly (even when sparse, where fixed thresholds see noise as rings).
+    // Bins hold at least ~20 points on average, so sparse clouds do not turn counting noise into rings.
+    const double bin_width = std::max(0.05, 20.0 * (high - low) / static_cast<double>(elevations.size()));
     const int bin_count = std::max(1, static_cast<int>(std::ceil((high - low) / bin_width)) + 1);
     std::vector<std::size_t> histogram(static_cast<std::size_t>(bin_count), 0);
     for (const double elevation : elevations)
       if (elevation >= low && elevation <= high)
         ++histogram[static_cast<std::size_t>(std::min(bin_count - 1, static_cast<int>((elevation - low) / bin_width)))];
-    const std::size_t occupied_threshold = std::max<std::size_t>(2, elevations.size() / 5000);
+    const std::size_t occupied_threshold =
+        std::max<std::size_t>(2, elevations.size() / (2 * static_cast<std::size_t>(bin_count)));
     bool inside = false;
     int runs = 0;
     int occupied = 0;
@@ -281,16 +284,16 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
   } else if (guess.point_count > 1500000) {
     guess.preset = "monument";
     reason << "more than 1.5 M points: static scan, monument";
-  } else if (guess.ring_count >= 8 || guess.elevation_span_degrees < 35.0) {
-    // A spinning multi-beam scanner (separated rings, or rings blurred by per-beam offsets within a
-    // narrow elevation span); its density tells a 64-beam from a 16-beam head.
+  } else if (guess.elevation_span_degrees < 35.0) {
+    // A spinning multi-beam scanner looks at a narrow elevation band (HDL-64E 27 deg, VLP-16 30 deg);
+    // its density (or ring count, when the rings are separable) tells a 64-beam from a 16-beam head.
     const bool dense = guess.point_count >= 60000 || guess.ring_count >= 48;
     guess.preset = dense ? "vlp64" : "vlp16";
-    reason << (guess.ring_count >= 8 ? "ring structure" : "narrow elevation span (< 35 deg)") << " of a spinning scanner, "
-           << (dense ? ">= 60 k points or >= 48 rings: vlp64" : "< 60 k points: vlp16");
+    reason << "narrow elevation span (< 35 deg) of a spinning scanner, "
+           << (dense ? ">= 60 k points or >= 48 rings: vlp64" : "< 60 k points and < 48 rings: vlp16");
   } else {
     guess.preset = "mid360";
-    reason << "no ring structure, 360 deg coverage and a tall (>= 35 deg) elevation span: mid360";
+    reason << "360 deg coverage and a tall (>= 35 deg) elevation span of a non-repetitive scanner: mid360";
   }
   guess.reason = reason.str();
   return guess;

@@ -50,16 +50,16 @@ struct SensorGuess {
   std::string reason;                 ///< one line: the measurements and the rule that chose it
   std::size_t point_count = 0;        ///< points of the cloud
   double azimuth_coverage = 0.0;      ///< fraction of 1-degree azimuth bins (around the origin) holding points
-  int ring_count = 0;                 ///< separated elevation bands (0.05 deg bins) of points beyond 3 m: the laser rings
+  int ring_count = 0;                 ///< separated elevation bands (0.05 deg bins, >= ~20 points each on average; occupied above half the mean) of points beyond 10 m: the laser rings
   double elevation_span_degrees = 0.0;///< 1st..99th percentile of the elevation angle, degrees
   double median_range = 0.0;          ///< median distance from the origin, m
 };
 
 /// Chooses among the presets by the cloud itself: narrow horizontal field of view (< 50% azimuth
-/// coverage) -> avia; more than 1.5 M points -> monument (static scan); a spinning multi-beam scanner
-/// (>= 8 separated rings, or an elevation span < 35 deg where beam offsets blur the rings) ->
-/// vlp64 when dense (>= 60 k points or >= 48 rings), else vlp16; otherwise (no rings, tall field of
-/// view) -> mid360. The origin is assumed to be the sensor; the up axis is +z (not estimated).
+/// coverage) -> avia; more than 1.5 M points -> monument (static scan); an elevation span (1st..99th
+/// percentile beyond 10 m) under 35 deg is a spinning multi-beam scanner -> vlp64 when dense (>= 60 k
+/// points or >= 48 rings), else vlp16; a taller span -> mid360. The origin is assumed to be the
+/// sensor and +z the up axis (neither is estimated).
 SensorGuess guess_sensor_preset(const PointCloud& cloud);
 
 }  // namespace quadrix
