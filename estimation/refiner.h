@@ -80,6 +80,21 @@ struct RefinementResult {
   std::string message;                 ///< backend report or why the problem is degenerate
 };
 
+/// Re-checks degeneracy at the refined pose and marks `result` Degenerate (rank, weak directions,
+/// message) when a DoF is free there: the start-pose check can miss a structural degeneracy, e.g.
+/// misaligned parallel planes look constrained until they are aligned. Shared by every backend.
+inline void mark_degenerate_solution(const std::vector<QuadricFactor>& factors, const RefinerOptions& options,
+                                     RefinementResult* result) {
+  if (result->status == RefinementStatus::Failed) return;
+  const ConstraintAnalysis at_solution = analyse_constraints(factors, result->transform, options.degeneracy_threshold);
+  if (at_solution.rank == 6) return;
+  result->status = RefinementStatus::Degenerate;
+  result->constrained_rank = at_solution.rank;
+  result->weak_directions = at_solution.weak_directions;
+  result->message = "the factors constrain only " + std::to_string(at_solution.rank) +
+                    " of 6 degrees of freedom at the refined pose (see weak_directions); " + result->message;
+}
+
 /// A refinement backend: same objective, same result fields.
 class Refiner {
  public:

@@ -150,20 +150,6 @@ ceres::LossFunction* make_loss(RobustLoss loss, double scale) {
   return nullptr;
 }
 
-// The start-pose check can miss a structural degeneracy (e.g. misaligned parallel planes look
-// constrained until they are aligned): re-check at the solution and report Degenerate if a DoF is free.
-void mark_degenerate_solution(const std::vector<QuadricFactor>& factors, const RefinerOptions& options,
-                              RefinementResult* result) {
-  if (result->status == RefinementStatus::Failed) return;
-  const ConstraintAnalysis at_solution = analyse_constraints(factors, result->transform, options.degeneracy_threshold);
-  if (at_solution.rank == 6) return;
-  result->status = RefinementStatus::Degenerate;
-  result->constrained_rank = at_solution.rank;
-  result->weak_directions = at_solution.weak_directions;
-  result->message = "the factors constrain only " + std::to_string(at_solution.rank) +
-                    " of 6 degrees of freedom at the refined pose (see weak_directions); " + result->message;
-}
-
 class CeresRefiner final : public Refiner {
  public:
   std::string name() const override { return "ceres"; }
