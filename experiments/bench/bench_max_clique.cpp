@@ -6,7 +6,11 @@
 // igraph runs are capped at kIgraphCapSeconds through igraph's interruption handler; a capped run
 // is reported as an error row "capped: igraph exceeded … s".
 // Numbers depend on the machine; ours were measured on 2 shared cores.
+#include "fitting/extraction.h"
+#include "fitting/scene_modelling.h"
+#include "geometry/io.h"
 #include "matching/compatibility_graph.h"
+#include "matching/correspondences.h"
 #include "matching/max_clique.h"
 
 #include <Eigen/Geometry>
@@ -15,6 +19,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <random>
@@ -296,6 +302,113 @@ void BM_Compatibility_Graduated_Igraph(benchmark::State& state) {
   if (ours != our_seconds().end()) state.counters["igraph_over_ours"] = mean / ours->second;
 }
 
+/// The KITTI pairs of ../shared/data/pairs.tsv: loop closures k -> 4438 (k = 0..5) and odometry
+/// 0 -> k (k = 1..5), as (source frame, target frame).
+const std::vector<std::pair<int, int>> kKittiPairs = {{0, 4438}, {1, 4438}, {2, 4438}, {3, 4438}, {4, 4438}, {5, 4438},
+                                                      {0, 1},    {0, 2},    {0, 3},    {0, 4},    {0, 5}};
+
+/// One KITTI pair: both frames modelled with the HDL-64E preset, their quadric correspondences and
+/// the four compatibility levels, built once. Not available when ../shared/data is absent.
+struct KittiGraphs {
+  std::size_t correspondences = 0;            ///< putative correspondences of the pair
+  quadrix::CorrespondenceQuality quality;     ///< inliers within 0.5 m under the ground truth, recall (>= 3)
+  quadrix::CompatibilityGraphs graphs;        ///< the four levels (delta_m = 0.2 ... 0.8 m)
+  bool available = false;                     ///< false when the KITTI files are missing
+};
+
+/// The scene model of KITTI 00 frame `frame`, cached; nullptr when the file is absent.
+const quadrix::SceneModel* kitti_model(int frame) {
+  static std::map<int, std::unique_ptr<quadrix::SceneModel>> models;
+  auto found = models.find(frame);
+  if (found != models.end()) return found->second.get();
+  char name[32];
+  std::snprintf(name, sizeof(name), frame == 4438 ? "%06d.ply" : "%06d.bin", frame);
+  const std::string path = std::string(QUADRIX_DATA_DIR) + "/kitti00/velodyne/" + name;
+  std::unique_ptr<quadrix::SceneModel> model;
+  if (std::filesystem::exists(path))
+    model = std::make_unique<quadrix::SceneModel>(
+        quadrix::model_scene(quadrix::read_point_cloud(path), quadrix::extraction_preset("vlp64"), quadrix::ModellingOptions{}).model);
+  return models.emplace(frame, std::move(model)).first->second.get();
+}
+
+const KittiGraphs& kitti_graphs(std::size_t pair_index) {
+  static std::map<std::size_t, KittiGraphs> cache;
+  auto found = cache.find(pair_index);
+  if (found != cache.end()) return found->second;
+  KittiGraphs result;
+  const quadrix::SceneModel* source = kitti_model(kKittiPairs[pair_index].first);
+  const quadrix::SceneModel* target = kitti_model(kKittiPairs[pair_index].second);
+  if (source && target) {
+    const quadrix::CorrespondenceSet set = quadrix::establish_correspondences(*source, *target);
+    result.correspondences = set.correspondences.size();
+    char truth[64];
+    std::snprintf(truth, sizeof(truth), "/kitti00/gt/T_%06d_from_%06d.txt", kKittiPairs[pair_index].second,
+                  kKittiPairs[pair_index].first);
+    result.quality = quadrix::evaluate_correspondences(*source, *target, set.correspondences,
+                                                       quadrix::read_pose_matrix(std::string(QUADRIX_DATA_DIR) + truth));
+    result.graphs = quadrix::build_compatibility_graphs(set.source_centers(*source), set.target_centers(*target));
+    result.available = true;
+  }
+  return cache.emplace(pair_index, std::move(result)).first->second;
+}
+
+std::string kitti_key(std::size_t pair_index) { return "kitti" + std::to_string(pair_index); }
+
+void kitti_arguments(benchmark::internal::Benchmark* benchmark) {
+  for (std::size_t i = 0; i < kKittiPairs.size(); ++i) benchmark->Arg(static_cast<int64_t>(i));
+  benchmark->ArgName("pair");
+}
+
+/// All four levels of a KITTI pair with our graduated solver (issue 6 figure: <= 20 ms).
+void BM_Kitti_Graduated_Ours(benchmark::State& state) {
+  const std::size_t pair_index = static_cast<std::size_t>(state.range(0));
+  const KittiGraphs& kitti = kitti_graphs(pair_index);
+  if (!kitti.available) {
+    state.SkipWithError("real data absent: ../shared/data/kitti00");
+    return;
+  }
+  quadrix::GraduatedCliqueResult result;
+  const Clock::time_point start = Clock::now();
+  for (auto _ : state) {
+    result = quadrix::find_graduated_maximum_cliques(kitti.graphs.levels, quadrix::MaxCliqueOptions{});
+    benchmark::DoNotOptimize(result.levels.data());
+  }
+  our_seconds()[kitti_key(pair_index)] =
+      std::chrono::duration<double>(Clock::now() - start).count() / static_cast<double>(state.iterations());
+  state.counters["correspondences"] = static_cast<double>(kitti.correspondences);
+  state.counters["inliers"] = static_cast<double>(kitti.quality.inliers);
+  state.counters["inlier_ratio"] = kitti.quality.inlier_ratio;
+  state.counters["recalled"] = kitti.quality.recalled ? 1.0 : 0.0;
+  for (std::size_t k = 0; k < result.levels.size(); ++k)
+    state.counters["clique_" + std::to_string(k + 1)] = static_cast<double>(result.levels[k].size());
+}
+
+/// igraph's clique number on the same four levels of a KITTI pair, and its time over ours.
+void BM_Kitti_Igraph(benchmark::State& state) {
+  install_igraph_handlers();
+  const std::size_t pair_index = static_cast<std::size_t>(state.range(0));
+  const KittiGraphs& kitti = kitti_graphs(pair_index);
+  if (!kitti.available) {
+    state.SkipWithError("real data absent: ../shared/data/kitti00");
+    return;
+  }
+  std::vector<std::unique_ptr<IgraphCopy>> copies;
+  for (const BitsetGraph& level : kitti.graphs.levels) copies.push_back(std::make_unique<IgraphCopy>(level));
+  std::vector<long> sizes(copies.size(), 0);
+  const Clock::time_point start = Clock::now();
+  for (auto _ : state) {
+    for (std::size_t k = 0; k < copies.size(); ++k) sizes[k] = copies[k]->clique_number();
+    if (std::any_of(sizes.begin(), sizes.end(), [](long size) { return size < 0; })) {
+      state.SkipWithError(("capped: igraph exceeded " + std::to_string(static_cast<int>(kIgraphCapSeconds)) + " s").c_str());
+      return;
+    }
+  }
+  const double mean = std::chrono::duration<double>(Clock::now() - start).count() / static_cast<double>(state.iterations());
+  for (std::size_t k = 0; k < sizes.size(); ++k) state.counters["clique_" + std::to_string(k + 1)] = static_cast<double>(sizes[k]);
+  const auto ours = our_seconds().find(kitti_key(pair_index));
+  if (ours != our_seconds().end()) state.counters["igraph_over_ours"] = mean / ours->second;
+}
+
 void BM_Compatibility_BuildAndGraduated(benchmark::State& state) {
   const PlantedCorrespondences& planted = planted_correspondences();
   std::size_t inliers_at_strictest = 0;
@@ -320,5 +433,7 @@ BENCHMARK(BM_Compatibility_Build)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Compatibility_Graduated_Ours)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Compatibility_Graduated_Igraph)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Compatibility_BuildAndGraduated)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Kitti_Graduated_Ours)->Apply(kitti_arguments)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Kitti_Igraph)->Apply(kitti_arguments)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 BENCHMARK_MAIN();
