@@ -17,6 +17,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <chrono>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -79,6 +81,37 @@ struct RefinementResult {
   std::vector<Vector6d> weak_directions;  ///< unit increments [phi; rho] that J^T J does not constrain
   std::string message;                 ///< backend report or why the problem is degenerate
 };
+
+/// The common start of every backend's refine(): rejects negative or non-finite factor weights
+/// (quadrix::Error naming the backend and factor), fills the result's backend, algorithm, start
+/// transform, factor count and initial cost, and analyses the constraints at the start pose; when
+/// fewer than 6 DoF are constrained the result comes back with status Degenerate (and its time),
+/// otherwise with status Failed until the backend sets its own outcome.
+inline RefinementResult start_refinement(const std::string& backend, const std::string& algorithm,
+                                         const std::vector<QuadricFactor>& factors, const Eigen::Isometry3d& initial,
+                                         const RefinerOptions& options,
+                                         std::chrono::steady_clock::time_point start_time) {
+  for (std::size_t k = 0; k < factors.size(); ++k)
+    if (!(factors[k].weight >= 0.0) || !std::isfinite(factors[k].weight))
+      throw Error(backend + " refiner: factor " + std::to_string(k) + " has a negative or non-finite weight");
+  RefinementResult result;
+  result.backend = backend;
+  result.algorithm = algorithm;
+  result.transform = initial;
+  result.factor_count = factors.size();
+  result.initial_cost = refinement_cost(factors, initial, options.loss, options.loss_scale);
+  result.final_cost = result.initial_cost;
+  const ConstraintAnalysis constraints = analyse_constraints(factors, initial, options.degeneracy_threshold);
+  result.constrained_rank = constraints.rank;
+  result.weak_directions = constraints.weak_directions;
+  if (constraints.rank < 6) {
+    result.status = RefinementStatus::Degenerate;
+    result.message = "the factors constrain only " + std::to_string(constraints.rank) +
+                     " of 6 degrees of freedom at the start pose (see weak_directions)";
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+  }
+  return result;
+}
 
 /// Re-checks degeneracy at the refined pose and marks `result` Degenerate (rank, weak directions,
 /// message) when a DoF is free there: the start-pose check can miss a structural degeneracy, e.g.

@@ -161,27 +161,8 @@ class CeresRefiner final : public Refiner {
     if (algorithm != "levenberg_marquardt" && algorithm != "dogleg")
       throw Error("ceres refiner: unknown algorithm '" + algorithm + "' (expected levenberg_marquardt or dogleg)");
     if (options.max_iterations <= 0) throw Error("ceres refiner: max_iterations must be > 0");
-    for (std::size_t k = 0; k < factors.size(); ++k)
-      if (!(factors[k].weight >= 0.0) || !std::isfinite(factors[k].weight))
-        throw Error("ceres refiner: factor " + std::to_string(k) + " has a negative or non-finite weight");
-
-    RefinementResult result;
-    result.backend = name();
-    result.algorithm = algorithm;
-    result.transform = initial;
-    result.factor_count = factors.size();
-    result.initial_cost = refinement_cost(factors, initial, options.loss, options.loss_scale);
-    result.final_cost = result.initial_cost;
-    const ConstraintAnalysis constraints = analyse_constraints(factors, initial, options.degeneracy_threshold);
-    result.constrained_rank = constraints.rank;
-    result.weak_directions = constraints.weak_directions;
-    if (constraints.rank < 6) {
-      result.status = RefinementStatus::Degenerate;
-      result.message = "the factors constrain only " + std::to_string(constraints.rank) +
-                       " of 6 degrees of freedom at the start pose (see weak_directions)";
-      result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
-      return result;
-    }
+    RefinementResult result = start_refinement(name(), algorithm, factors, initial, options, start_time);
+    if (result.status == RefinementStatus::Degenerate) return result;
 
     Eigen::Quaterniond start_rotation(initial.linear());
     start_rotation.normalize();
