@@ -205,6 +205,11 @@ FactorSet build_quadric_factors(const std::vector<QuadricRecord>& source, const 
   }
   if (options.source_ground && options.target_ground)
     result.factors.push_back(make_ground_factor(*options.source_ground, *options.target_ground, options.ground_weight));
+  // Ablations of Eq. (quadrics distance): drop the rotation or the translation part of every residual.
+  for (QuadricFactor& factor : result.factors) {
+    if (!options.use_rotation_error) factor.rotation_mask.setZero();
+    if (!options.use_translation_error) factor.translation_mask.setZero();
+  }
   return result;
 }
 

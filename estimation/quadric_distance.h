@@ -116,6 +116,8 @@ struct FactorBuildOptions {
   std::optional<GroundPlane> source_ground;  ///< with target_ground: adds the ground constraint factor
   std::optional<GroundPlane> target_ground;  ///< with source_ground: adds the ground constraint factor
   double ground_weight = 1.0;                ///< w of the ground constraint factor
+  bool use_rotation_error = true;            ///< keep e_R of Eq. (quadrics distance); false zeroes every factor's I_R (ablation "W/O e_R")
+  bool use_translation_error = true;         ///< keep e_t of Eq. (quadrics distance); false zeroes every factor's I_t (ablation "W/O e_t")
 };
 
 /// The factors of one candidate set with counts of what happened to its correspondences.

@@ -63,6 +63,7 @@ struct RefinerOptions {
   double initial_rotation_step = 0.05;     ///< nlopt BOBYQA initial step of phi, radians
   double initial_translation_step = 0.5;   ///< nlopt BOBYQA initial step of rho, metres
   double degeneracy_threshold = 1e-6;      ///< eigenvalue of J^T J below this * largest: direction unconstrained
+  bool check_degeneracy = true;            ///< false: optimise even when J^T J is rank-deficient (free directions keep the start pose); used by term ablations
 };
 
 /// Result and diagnostics of one refinement (identical fields for every backend).
@@ -104,7 +105,7 @@ inline RefinementResult start_refinement(const std::string& backend, const std::
   const ConstraintAnalysis constraints = analyse_constraints(factors, initial, options.degeneracy_threshold);
   result.constrained_rank = constraints.rank;
   result.weak_directions = constraints.weak_directions;
-  if (constraints.rank < 6) {
+  if (constraints.rank < 6 && options.check_degeneracy) {
     result.status = RefinementStatus::Degenerate;
     result.message = "the factors constrain only " + std::to_string(constraints.rank) +
                      " of 6 degrees of freedom at the start pose (see weak_directions)";
@@ -118,7 +119,7 @@ inline RefinementResult start_refinement(const std::string& backend, const std::
 /// misaligned parallel planes look constrained until they are aligned. Shared by every backend.
 inline void mark_degenerate_solution(const std::vector<QuadricFactor>& factors, const RefinerOptions& options,
                                      RefinementResult* result) {
-  if (result->status == RefinementStatus::Failed) return;
+  if (result->status == RefinementStatus::Failed || !options.check_degeneracy) return;
   const ConstraintAnalysis at_solution = analyse_constraints(factors, result->transform, options.degeneracy_threshold);
   if (at_solution.rank == 6) return;
   result->status = RefinementStatus::Degenerate;

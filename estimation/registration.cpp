@@ -121,6 +121,12 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
   factor_options.augment_non_central = options.estimation.augment_non_central;
   factor_options.manhattan_tolerance_degrees = options.estimation.manhattan_tolerance_degrees;
   factor_options.structure_labels = structure_labels();
+  factor_options.use_rotation_error = options.estimation.use_rotation_error;
+  factor_options.use_translation_error = options.estimation.use_translation_error;
+  RefinerOptions refiner_options = options.estimation.refinement;
+  // Without e_R or e_t some directions may be unconstrained by design: optimise what is left and keep
+  // the SVD start along the rest (the paper's ablation rows), instead of refusing as degenerate.
+  if (!options.estimation.use_rotation_error || !options.estimation.use_translation_error) refiner_options.check_degeneracy = false;
   if (source.has_ground && target.has_ground) {
     // f_pp against the estimated ground normal of each cloud (not the z axis: REFERENCE.md pitfall).
     factor_options.source_ground_normal = source.ground_normal;
@@ -171,7 +177,14 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
                                                     factor_options);
     candidate.factor_count = factors.factors.size();
     candidate.filtered_count = factors.filtered_count;
-    const RefinementResult refined = refiner->refine(factors.factors, initial.transform, options.estimation.refinement);
+    if (!options.estimation.refine) {  // ablation: the SVD estimate is the candidate
+      candidate.refinement_status = "skipped";
+      candidate.valid = true;
+      candidate.note = "refinement disabled (estimation.refine = false)";
+      result.candidates.push_back(candidate);
+      continue;
+    }
+    const RefinementResult refined = refiner->refine(factors.factors, initial.transform, refiner_options);
     candidate.refinement_status = refinement_status_name(refined.status);
     candidate.refinement_cost = refined.final_cost;
     candidate.transform = refined.transform;

@@ -51,6 +51,9 @@ struct EstimationOptions {
   bool use_ground_constraint = true;          ///< add the ground plane-to-plane factor when both clouds have a ground
   double ground_weight = 1.0;                 ///< w of the ground factor
   std::size_t minimum_inliers = 3;            ///< a candidate needs at least this many clique correspondences (paper: 3)
+  bool refine = true;                         ///< false: each candidate is its SVD estimate T^0_k (ablation "W/O trans. refinement")
+  bool use_rotation_error = true;             ///< false: refinement without e_R of Eq. (quadrics distance) (ablation "W/O e_R")
+  bool use_translation_error = true;          ///< false: refinement without e_t of Eq. (quadrics distance) (ablation "W/O e_t")
 };
 
 /// Thresholds of the `ambiguous` status.
