@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
+#include <tuple>
 
 namespace quadrix {
 namespace {
@@ -45,6 +47,61 @@ TEST(CandidateSelection, SemanticNearestNeighboursAreOneToOnePerLabel) {
     if (record.label == scene.source[0].label) record.label = 999;
   EXPECT_EQ(semantic_nearest_neighbors(scene.source, target, scene.truth).size(), scene.source.size() - 2);
   EXPECT_TRUE(semantic_nearest_neighbors(scene.source, scene.target, testing::perturbation(rng, 100.0, 0.0) * scene.truth, 1.0).empty());
+}
+
+// The brute-force definition of SNN: every same-label pair within the cap, sorted by
+// (distance, source, target), taken greedily one-to-one.
+std::vector<RecordCorrespondence> brute_force_snn(const std::vector<QuadricRecord>& source,
+                                                  const std::vector<QuadricRecord>& target,
+                                                  const Eigen::Isometry3d& transform, double max_distance) {
+  std::vector<std::tuple<double, std::size_t, std::size_t>> all;
+  for (std::size_t i = 0; i < source.size(); ++i)
+    for (std::size_t j = 0; j < target.size(); ++j) {
+      if (source[i].label != target[j].label) continue;
+      const double distance = (transform * source[i].full_center - target[j].full_center).norm();
+      if (distance <= max_distance) all.emplace_back(distance, i, j);
+    }
+  std::sort(all.begin(), all.end());
+  std::vector<bool> source_used(source.size(), false), target_used(target.size(), false);
+  std::vector<RecordCorrespondence> pairs;
+  for (const auto& [distance, i, j] : all) {
+    if (source_used[i] || target_used[j]) continue;
+    source_used[i] = target_used[j] = true;
+    pairs.push_back({i, j});
+  }
+  return pairs;
+}
+
+TEST(CandidateSelection, SemanticNearestNeighboursEqualTheBruteForceGreedyAssignment) {
+  std::mt19937 rng(43);
+  for (int trial = 0; trial < 40; ++trial) {
+    // Crowded clouds with few labels, many shared nearest targets, and (every 4th trial) centres
+    // on an integer grid so exact distance ties occur.
+    const bool grid = trial % 4 == 0;
+    std::uniform_real_distribution<double> coordinate(-5.0, 5.0);
+    std::uniform_int_distribution<int> cell(-3, 3);
+    std::uniform_int_distribution<std::uint32_t> label(0, 2);
+    auto random_records = [&](std::size_t count) {
+      std::vector<QuadricRecord> records(count);
+      for (QuadricRecord& record : records) {
+        record.label = label(rng);
+        record.full_center = grid ? Eigen::Vector3d(cell(rng), cell(rng), cell(rng))
+                                  : Eigen::Vector3d(coordinate(rng), coordinate(rng), coordinate(rng));
+      }
+      return records;
+    };
+    const auto source = random_records(std::uniform_int_distribution<std::size_t>(0, 300)(rng));
+    const auto target = random_records(std::uniform_int_distribution<std::size_t>(0, 300)(rng));
+    const Eigen::Isometry3d transform = grid ? Eigen::Isometry3d::Identity() : testing::perturbation(rng, 1.0, 0.3);
+    const double cap = trial % 3 == 0 ? 1.5 : std::numeric_limits<double>::infinity();
+    const auto expected = brute_force_snn(source, target, transform, cap);
+    const auto actual = semantic_nearest_neighbors(source, target, transform, cap);
+    ASSERT_EQ(actual.size(), expected.size()) << "trial " << trial;
+    for (std::size_t n = 0; n < expected.size(); ++n) {
+      EXPECT_EQ(actual[n].source_index, expected[n].source_index) << "trial " << trial << " pair " << n;
+      EXPECT_EQ(actual[n].target_index, expected[n].target_index) << "trial " << trial << " pair " << n;
+    }
+  }
 }
 
 TEST(CandidateSelection, PicksTheTrueCandidateAmongPerturbedOnes) {

@@ -1,0 +1,90 @@
+// PointIndex: nanoflann's k-d tree (DESIGN.md: nanoflann only inside geometry's spatial search).
+#include "geometry/spatial_index.h"
+
+#include "geometry/error.h"
+
+#include <nanoflann.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+namespace quadrix {
+
+namespace {
+
+// nanoflann's dataset adaptor over the columns of a 3×N matrix.
+struct ColumnCloud {
+  Eigen::Matrix3Xd points;
+  std::size_t kdtree_get_point_count() const { return static_cast<std::size_t>(points.cols()); }
+  double kdtree_get_pt(std::size_t index, std::size_t dimension) const {
+    return points(static_cast<Eigen::Index>(dimension), static_cast<Eigen::Index>(index));
+  }
+  template <class BoundingBox>
+  bool kdtree_get_bbox(BoundingBox&) const { return false; }
+};
+
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, ColumnCloud>, ColumnCloud, 3,
+                                                   std::size_t>;
+
+// Converts squared distances to distances and orders ties by index, so results are deterministic.
+std::vector<Neighbor> sorted_neighbors(const std::vector<std::pair<std::size_t, double>>& found) {
+  std::vector<Neighbor> neighbors;
+  neighbors.reserve(found.size());
+  for (const auto& [index, squared] : found) neighbors.push_back({index, std::sqrt(squared)});
+  std::sort(neighbors.begin(), neighbors.end(), [](const Neighbor& a, const Neighbor& b) {
+    return a.distance < b.distance || (a.distance == b.distance && a.index < b.index);
+  });
+  return neighbors;
+}
+
+}  // namespace
+
+struct PointIndex::Tree {
+  ColumnCloud cloud;
+  KdTree tree;
+  explicit Tree(Eigen::Matrix3Xd points)
+      : cloud{std::move(points)}, tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {
+    if (cloud.points.cols() > 0) tree.buildIndex();
+  }
+};
+
+PointIndex::PointIndex(Eigen::Matrix3Xd points) {
+  for (Eigen::Index i = 0; i < points.cols(); ++i)
+    if (!points.col(i).allFinite())
+      throw Error("PointIndex: point " + std::to_string(i) + " is not finite (expected finite coordinates)");
+  tree_ = std::make_unique<Tree>(std::move(points));
+}
+
+PointIndex::~PointIndex() = default;
+PointIndex::PointIndex(PointIndex&&) noexcept = default;
+PointIndex& PointIndex::operator=(PointIndex&&) noexcept = default;
+
+std::size_t PointIndex::size() const { return tree_ ? tree_->cloud.kdtree_get_point_count() : 0; }
+
+const Eigen::Matrix3Xd& PointIndex::points() const { return tree_->cloud.points; }
+
+std::vector<Neighbor> PointIndex::nearest(const Eigen::Vector3d& query, std::size_t k) const {
+  const std::size_t count = std::min(k, size());
+  if (count == 0) return {};
+  std::vector<std::size_t> indices(count);
+  std::vector<double> squared(count);
+  const std::size_t found = tree_->tree.knnSearch(query.data(), count, indices.data(), squared.data());
+  std::vector<std::pair<std::size_t, double>> pairs;
+  pairs.reserve(found);
+  for (std::size_t n = 0; n < found; ++n) pairs.emplace_back(indices[n], squared[n]);
+  return sorted_neighbors(pairs);
+}
+
+std::vector<Neighbor> PointIndex::within_radius(const Eigen::Vector3d& query, double radius) const {
+  if (size() == 0 || !(radius >= 0.0)) return {};
+  std::vector<std::pair<std::size_t, double>> found;
+  // nanoflann's radius test is strict on the squared distance; nudge it so the boundary is inclusive.
+  const double squared_radius = std::nextafter(radius * radius, std::numeric_limits<double>::infinity());
+  tree_->tree.radiusSearch(query.data(), squared_radius, found, nanoflann::SearchParams(32, 0.0F, false));
+  return sorted_neighbors(found);
+}
+
+}  // namespace quadrix

@@ -1,0 +1,44 @@
+// Exact nearest-neighbour search over a fixed set of 3-D points (a k-d tree; nanoflann stays in
+// the .cpp). Used wherever a stage needs the nearest of many points: SNN in candidate selection.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace quadrix {
+
+/// One neighbour found by a PointIndex query.
+struct Neighbor {
+  std::size_t index = 0;  ///< column of the indexed point
+  double distance = 0.0;  ///< Euclidean distance to the query, metres
+};
+
+/// A k-d tree over the columns of a 3×N matrix; the points are copied, so the source may go away.
+class PointIndex {
+ public:
+  /// Builds the tree over `points` (any N, including 0; non-finite points are rejected by Error).
+  explicit PointIndex(Eigen::Matrix3Xd points);
+  ~PointIndex();
+  PointIndex(PointIndex&&) noexcept;             ///< movable
+  PointIndex& operator=(PointIndex&&) noexcept;  ///< movable
+  PointIndex(const PointIndex&) = delete;
+  PointIndex& operator=(const PointIndex&) = delete;
+
+  /// Number of indexed points.
+  std::size_t size() const;
+  /// The indexed points, one column each.
+  const Eigen::Matrix3Xd& points() const;
+  /// The min(k, size()) nearest points to `query`, by increasing distance (ties by index).
+  std::vector<Neighbor> nearest(const Eigen::Vector3d& query, std::size_t k) const;
+  /// Every point within `radius` of `query` (inclusive), by increasing distance (ties by index).
+  std::vector<Neighbor> within_radius(const Eigen::Vector3d& query, double radius) const;
+
+ private:
+  struct Tree;
+  std::unique_ptr<Tree> tree_;
+};
+
+}  // namespace quadrix
