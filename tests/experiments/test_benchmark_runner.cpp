@@ -1,0 +1,238 @@
+// The benchmark harness: a run split in 3 shards and merged gives exactly the outputs of one run;
+// rows round-trip through CSV; pairs without ground truth are never counted; ablations are applied;
+// and on real KITTI pairs Quadrix is run through the cache with (and without) random yaw trials.
+#include "experiments/benchmark_runner.h"
+#include "geometry/error.h"
+#include "geometry/io.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace quadrix {
+namespace {
+
+namespace fs = std::filesystem;
+using quadrix::testing::shared_data_path;
+
+std::string read_text(const fs::path& path) {
+  std::ifstream file(path);
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+class BenchFolder : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    folder_ = fs::temp_directory_path() / ("quadrix_bench_test_" + std::to_string(::getpid()) + "_" +
+                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(folder_);
+    fs::create_directories(folder_);
+  }
+  void TearDown() override { fs::remove_all(folder_); }
+  fs::path folder_;
+};
+
+// Pairs over two tiny clouds; every third pair has no ground truth.
+std::vector<BenchPair> tiny_pairs(const fs::path& folder, std::size_t count) {
+  PointCloud cloud;
+  cloud.positions = Eigen::Matrix3Xf::Random(3, 20);
+  write_point_cloud((folder / "a.ply").string(), cloud);
+  write_point_cloud((folder / "b.ply").string(), cloud);
+  std::vector<BenchPair> pairs;
+  for (std::size_t k = 0; k < count; ++k) {
+    BenchPair pair;
+    pair.id = "pair" + std::to_string(k);
+    pair.source = (folder / (k % 2 ? "a.ply" : "b.ply")).string();
+    pair.target = (folder / "a.ply").string();
+    if (k % 3 != 2) pair.ground_truth = Eigen::Isometry3d(Eigen::Translation3d(double(k), 0.0, 0.0));
+    pair.difficulty = k < count / 2 ? "easy" : "hard";
+    pairs.push_back(pair);
+  }
+  return pairs;
+}
+
+// A deterministic stand-in method: right on even tasks' pairs, 3 m off on odd ones, fixed "times".
+BenchMethodOutput fake_method(const BenchMethodInput& input) {
+  BenchMethodOutput output;
+  const std::size_t k = std::stoul(input.pair->id.substr(4));
+  const Eigen::Isometry3d truth = input.pair->ground_truth.value_or(Eigen::Isometry3d::Identity()) * input.perturbation.inverse();
+  output.transform = truth;
+  if (k % 2) output.transform.translation().x() += 3.0;
+  output.status = "solved";
+  output.message = "fake, with a comma, and \"quotes\"";
+  output.timings_ms = {{"features", 1.5 + double(k)}, {"total", 10.0 + 3.0 * double(k)}};
+  return output;
+}
+
+TEST_F(BenchFolder, ThreeShardsMergedGiveExactlyTheOutputsOfOneRun) {
+  register_bench_method("fake", fake_method);
+  register_bench_method("fake-slow", [](const BenchMethodInput& input) {
+    BenchMethodOutput output = fake_method(input);
+    output.timings_ms["total"] *= 4.0;
+    return output;
+  });
+  const std::vector<BenchPair> pairs = tiny_pairs(folder_, 7);
+  BenchOptions options;
+  options.methods = {"fake", "fake-slow"};
+  options.yaw_range_degrees = 180.0;
+  options.translation_range = 3.0;
+  options.trials = 2;
+  options.seed = 5;
+  options.progress = false;
+  BenchRunInfo info;
+  info.title = "shard test";
+  info.methods = options.methods;
+  info.task_count = pairs.size() * 2;
+  info.options_text = "tiny pairs, yaw 180, trials 2";
+
+  options.jobs = 2;
+  const std::vector<BenchRow> whole = run_benchmark(pairs, options);
+  ASSERT_EQ(whole.size(), 28u);
+  write_bench_outputs((folder_ / "whole").string(), whole, info);
+
+  std::vector<std::string> shard_folders;
+  std::size_t shard_rows = 0;
+  options.jobs = 1;
+  for (int shard = 1; shard <= 3; ++shard) {
+    options.shard_index = shard;
+    options.shard_count = 3;
+    info.shard_index = shard;
+    info.shard_count = 3;
+    const std::vector<BenchRow> part = run_benchmark(pairs, options);
+    shard_rows += part.size();
+    for (const BenchRow& row : part) EXPECT_EQ(row.task % 3, static_cast<std::size_t>(shard - 1));
+    shard_folders.push_back((folder_ / ("shard" + std::to_string(shard))).string());
+    write_bench_outputs(shard_folders.back(), part, info);
+  }
+  EXPECT_EQ(shard_rows, whole.size());
+  merge_bench_outputs(shard_folders, (folder_ / "merged").string());
+  for (const char* file : {"pairs.csv", "summary.md", "run.json", "success_by_difficulty.svg", "error_cdf.svg", "time_per_stage.svg"})
+    EXPECT_EQ(read_text(folder_ / "whole" / file), read_text(folder_ / "merged" / file)) << file;
+
+  // The summary itself: 2 of 3 pairs have ground truth; even pairs succeed.
+  const std::vector<MethodSummary> summaries = summarize_bench(whole, options.methods);
+  ASSERT_EQ(summaries.size(), 2u);
+  EXPECT_EQ(summaries[0].with_ground_truth, 10u);  // pairs 0,1,3,4,6 x 2 trials
+  EXPECT_EQ(summaries[0].without_ground_truth, 4u);
+  EXPECT_EQ(summaries[0].successes, 6u);           // pairs 0,4,6 x 2 trials
+  EXPECT_NEAR(summaries[1].time_ratio_to_quadrix, 0.0, 0.0);  // no quadrix in this run
+  // Perturbations are recorded and reproducible from the seed.
+  EXPECT_NE(whole[0].yaw_degrees, whole[2].yaw_degrees);
+  EXPECT_EQ(whole[0].seed, 5u * 1000003u);
+
+  // An incomplete merge names what is missing.
+  try {
+    merge_bench_outputs({shard_folders[0], shard_folders[2]}, (folder_ / "bad").string());
+    FAIL() << "a merge without shard 2 was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("missing"), std::string::npos) << error.what();
+  }
+}
+
+TEST_F(BenchFolder, RowsRoundTripThroughCsvExactly) {
+  register_bench_method("fake", fake_method);
+  BenchOptions options;
+  options.methods = {"fake"};
+  options.yaw_range_degrees = 45.0;
+  options.trials = 3;
+  options.progress = false;
+  const std::vector<BenchRow> rows = run_benchmark(tiny_pairs(folder_, 3), options);
+  const std::string path = (folder_ / "rows.csv").string();
+  write_bench_rows_csv(path, rows);
+  const std::vector<BenchRow> read = read_bench_rows_csv(path);
+  ASSERT_EQ(read.size(), rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    EXPECT_EQ(read[k].pair_id, rows[k].pair_id);
+    EXPECT_EQ(read[k].message, rows[k].message);
+    EXPECT_EQ(read[k].rte, rows[k].rte);
+    EXPECT_EQ(read[k].yaw_degrees, rows[k].yaw_degrees);
+    EXPECT_EQ(read[k].timings_ms, rows[k].timings_ms);
+    EXPECT_EQ(read[k].has_ground_truth, rows[k].has_ground_truth);
+    EXPECT_EQ(read[k].success, rows[k].success);
+  }
+  std::ofstream(path, std::ios::app) << "1,x,0\n";
+  try {
+    read_bench_rows_csv(path);
+    FAIL() << "a short row was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find(path + ":" + std::to_string(rows.size() + 2)), std::string::npos) << error.what();
+  }
+}
+
+TEST(BenchAblations, OptionsAndModelsChangeAsTheTableRowSays) {
+  RegistrationOptions options;
+  apply_ablation("ks25", options);
+  EXPECT_EQ(options.correspondences.top_k_similar, 25);
+  apply_ablation("dm-0.2-0.8", options);
+  EXPECT_EQ(options.graphs.thresholds, (std::vector<double>{0.2, 0.8}));
+  apply_ablation("no-refinement", options);
+  EXPECT_FALSE(options.estimation.refine);
+  EXPECT_THROW(apply_ablation("no-such-row", options), Error);
+
+  SceneModel model;
+  const QuadricType types[] = {QuadricType::Plane, QuadricType::Line, QuadricType::Ellipsoid, QuadricType::Plane, QuadricType::Point};
+  for (const QuadricType type : types) {
+    QuadricRecord record;
+    record.label = static_cast<std::uint32_t>(type == QuadricType::Plane ? ElementClass::Plane : ElementClass::Object);
+    model.records.push_back(record);
+    model.types.push_back(type);
+    model.element_point_counts.push_back(10);
+  }
+  model.augmented_begin = 4;  // the last record is an augmented point
+  const SceneModel without_planes = apply_model_ablation("no-planar-center", model);
+  EXPECT_EQ(without_planes.records.size(), 3u);
+  EXPECT_EQ(without_planes.augmented_begin, 2u);
+  EXPECT_EQ(without_planes.types.back(), QuadricType::Point);
+  const SceneModel without_central = apply_model_ablation("no-central", model);
+  EXPECT_EQ(without_central.records.size(), 4u);  // the ellipsoid goes, the augmented point stays
+  const SceneModel unlabelled = apply_model_ablation("no-semantics", model);
+  for (const QuadricRecord& record : unlabelled.records) EXPECT_EQ(record.label, static_cast<std::uint32_t>(ElementClass::Object));
+}
+
+TEST_F(BenchFolder, QuadrixOnRealKittiPairsWithAndWithoutYawTrials) {
+  QUADRIX_REQUIRE_SHARED_DATA("pairs.tsv");
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/004438.ply");
+  std::vector<BenchPair> pairs;
+  for (const BenchPair& pair : read_pairs_tsv(shared_data_path("pairs.tsv")))
+    if (pair.id == "kitti00_lc_0_4438" || pair.id == "kitti00_lc_3_4438") pairs.push_back(pair);
+  ASSERT_EQ(pairs.size(), 2u);
+  BenchOptions options;
+  options.progress = false;
+  options.jobs = 2;
+  const std::vector<BenchRow> plain = run_benchmark(pairs, options);
+  ASSERT_EQ(plain.size(), 2u);
+  for (const BenchRow& row : plain) {
+    EXPECT_TRUE(row.success) << row.pair_id << ": RTE " << row.rte << " RRE " << row.rre << " " << row.message;
+    EXPECT_GE(row.inliers, 3) << row.pair_id;
+    EXPECT_EQ(row.recalled, 1) << row.pair_id;
+    EXPECT_GT(row.source_model_bytes, 0);
+    EXPECT_EQ(row.target_model_bytes, plain[0].target_model_bytes);  // one shared target model
+    for (const char* stage : {"modelling_source", "modelling_target", "correspondences", "cliques", "estimation", "total"})
+      EXPECT_TRUE(row.timings_ms.count(stage)) << stage;
+  }
+  EXPECT_EQ(plain[0].timings_ms.at("modelling_target"), plain[1].timings_ms.at("modelling_target"));  // built once
+
+  // Random yaw about the up axis: the ground truth follows the perturbation.
+  options.yaw_range_degrees = 180.0;
+  options.translation_range = 5.0;
+  options.trials = 2;
+  options.seed = 11;
+  const std::vector<BenchRow> turned = run_benchmark({pairs[0]}, options);
+  ASSERT_EQ(turned.size(), 2u);
+  for (const BenchRow& row : turned) {
+    EXPECT_GT(std::abs(row.yaw_degrees), 1.0);
+    EXPECT_TRUE(row.success) << "yaw " << row.yaw_degrees << ": RTE " << row.rte << " RRE " << row.rre << " " << row.message;
+  }
+}
+
+}  // namespace
+}  // namespace quadrix
