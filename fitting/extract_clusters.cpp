@@ -1,6 +1,6 @@
 // Euclidean clustering of the points left after ground and planes (paper §"Quadric Extraction",
 // step 1(c) and key objects): connected components of the graph "closer than the radius".
-// Two exact backends: a hash grid with union-find (default; cells of edge r/sqrt(3) are complete
+// Two exact backends: a sorted grid with union-find (default; cells of edge r/sqrt(3) are complete
 // subgraphs, so only pairs of cells need one witness pair) and PCL's EuclideanClusterExtraction.
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
@@ -10,10 +10,11 @@
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <unordered_map>
 
 namespace quadrix {
 namespace {
@@ -40,59 +41,145 @@ class UnionFind {
   std::vector<std::uint32_t> parent_;
 };
 
+// Open-addressing hash table from a cell key to its index (linear probing, power-of-two size, at
+// most half full). One flat allocation instead of a node per cell as in std::unordered_map.
+class CellTable {
+ public:
+  explicit CellTable(std::size_t cells) {
+    std::size_t size = 16;
+    while (size < 2 * cells) size <<= 1;
+    mask_ = size - 1;
+    keys_.assign(size, kEmpty);
+    values_.resize(size);
+  }
+  void insert(std::uint64_t key, std::uint32_t value) {
+    std::size_t slot = hash(key);
+    while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
+    keys_[slot] = key;
+    values_[slot] = value;
+  }
+  /// Index of the cell with `key`, or -1.
+  std::int64_t find(std::uint64_t key) const {
+    for (std::size_t slot = hash(key);; slot = (slot + 1) & mask_) {
+      if (keys_[slot] == key) return values_[slot];
+      if (keys_[slot] == kEmpty) return -1;
+    }
+  }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);  // voxel_key never sets the top bit
+  std::size_t hash(std::uint64_t key) const { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_; }
+  std::size_t mask_ = 0;
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::uint32_t> values_;
+};
+
+// Cells of edge r / sqrt(3) are complete subgraphs of the "closer than r" graph, so clusters are
+// connected components of cells, and two cells join when one witness pair is closer than r. The
+// points are sorted by cell key (x, then y, then z) once, so cells are runs of one contiguous array
+// and the cells of one vertical column (x, y) are runs of the cell list, ordered by z. Each pair of
+// cells within reach (|dx|, |dy|, |dz| <= 2) is visited once: one hash lookup per pair of columns,
+// then a merge along z. The cells' bounding boxes settle most pairs without looking at points:
+// boxes farther apart than r never join, boxes whose union fits in a ball of diameter r always do.
 std::vector<std::vector<std::uint32_t>> grid_clusters(const Eigen::Matrix3Xd& points,
                                                       const std::vector<std::uint32_t>& candidates, double radius) {
   const double cell = radius / std::sqrt(3.0);
   const double inverse = 1.0 / cell;
   const double radius_squared = radius * radius;
-  struct Cell {
-    Eigen::Vector3i coordinate;
-    std::vector<std::uint32_t> members;  // positions in `candidates`
-  };
-  std::vector<Cell> cells;
-  std::unordered_map<std::uint64_t, std::uint32_t> cell_of_key;
-  cell_of_key.reserve(candidates.size() / 2 + 16);
-  for (std::uint32_t i = 0; i < candidates.size(); ++i) {
-    const Eigen::Vector3i c((points.col(candidates[i]) * inverse).array().floor().cast<int>());
-    auto [it, inserted] = cell_of_key.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()), static_cast<std::uint32_t>(cells.size()));
-    if (inserted) cells.push_back({c, {}});
-    cells[it->second].members.push_back(i);
+  const std::size_t count = candidates.size();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(count);  // (cell key, position in candidates)
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const Eigen::Vector3d p = points.col(candidates[i]);
+    keyed[i] = {detail::voxel_key(static_cast<std::int64_t>(std::floor(p.x() * inverse)),
+                                  static_cast<std::int64_t>(std::floor(p.y() * inverse)),
+                                  static_cast<std::int64_t>(std::floor(p.z() * inverse))),
+                i};
   }
-  // Points in one cell are within the radius of each other: cells are the union-find items.
-  UnionFind sets(cells.size());
-  for (std::uint32_t a = 0; a < cells.size(); ++a) {
-    const Cell& first = cells[a];
-    for (int dx = -2; dx <= 2; ++dx)
-      for (int dy = -2; dy <= 2; ++dy)
-        for (int dz = -2; dz <= 2; ++dz) {
-          const Eigen::Vector3i c = first.coordinate + Eigen::Vector3i(dx, dy, dz);
-          const auto it = cell_of_key.find(detail::voxel_key(c.x(), c.y(), c.z()));
-          if (it == cell_of_key.end() || it->second <= a) continue;
-          const std::uint32_t b = it->second;
-          if (sets.find(a) == sets.find(b)) continue;
-          // Cells closer than the radius at their nearest corners may hold a witness pair.
-          const Eigen::Vector3i gap = (Eigen::Vector3i(std::abs(dx), std::abs(dy), std::abs(dz)).array() - 1).cwiseMax(0);
-          if (gap.cast<double>().squaredNorm() * cell * cell > radius_squared) continue;
-          bool joined = false;
-          for (const std::uint32_t i : first.members) {
-            const Eigen::Vector3d p = points.col(candidates[i]);
-            for (const std::uint32_t j : cells[b].members)
-              if ((points.col(candidates[j]) - p).squaredNorm() <= radius_squared) {
-                joined = true;
-                break;
-              }
-            if (joined) break;
-          }
-          if (joined) sets.unite(a, b);
+  std::sort(keyed.begin(), keyed.end());
+  // Sorted copy of the coordinates; cell c holds sorted points [first[c], first[c + 1]); column k
+  // holds cells [column_first[k], column_first[k + 1]).
+  Eigen::Matrix3Xd sorted(3, static_cast<Eigen::Index>(count));
+  std::vector<std::uint32_t> first, column_first;
+  std::vector<Eigen::Vector3i> coordinate;
+  std::vector<Eigen::AlignedBox3d> box;
+  first.reserve(count / 2 + 1);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Eigen::Vector3d p = points.col(candidates[keyed[i].second]);
+    sorted.col(static_cast<Eigen::Index>(i)) = p;
+    if (i > 0 && keyed[i].first == keyed[i - 1].first) {
+      box.back().extend(p);
+      continue;
+    }
+    const Eigen::Vector3i c(static_cast<int>(std::floor(p.x() * inverse)), static_cast<int>(std::floor(p.y() * inverse)),
+                            static_cast<int>(std::floor(p.z() * inverse)));
+    if (coordinate.empty() || c.head<2>() != coordinate.back().head<2>())
+      column_first.push_back(static_cast<std::uint32_t>(first.size()));
+    first.push_back(static_cast<std::uint32_t>(i));
+    coordinate.push_back(c);
+    box.emplace_back(p, p);
+  }
+  const std::size_t cells = first.size(), columns = column_first.size();
+  first.push_back(static_cast<std::uint32_t>(count));
+  column_first.push_back(static_cast<std::uint32_t>(cells));
+  CellTable column_table(columns);
+  for (std::uint32_t k = 0; k < columns; ++k) {
+    const Eigen::Vector3i& c = coordinate[column_first[k]];
+    column_table.insert(detail::voxel_key(c.x(), c.y(), 0), k);
+  }
+
+  UnionFind sets(cells);
+  const auto try_join = [&](std::uint32_t a, std::uint32_t b) {
+    if (sets.find(a) == sets.find(b)) return;
+    // Box-to-box distance bounds the distance of every pair of their points.
+    const Eigen::Vector3d gap = (box[a].min() - box[b].max()).cwiseMax(box[b].min() - box[a].max()).cwiseMax(0.0);
+    if (gap.squaredNorm() > radius_squared) return;
+    if (box[a].merged(box[b]).diagonal().squaredNorm() <= radius_squared) {
+      sets.unite(a, b);
+      return;
+    }
+    for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) {
+      const Eigen::Vector3d p = sorted.col(i);
+      for (std::uint32_t j = first[b]; j < first[b + 1]; ++j)
+        if ((sorted.col(j) - p).squaredNorm() <= radius_squared) {
+          sets.unite(a, b);
+          return;
         }
+    }
+  };
+  // Neighbouring columns "after" this one ((dx, dy) lexicographically positive), each pair of
+  // columns once; the column itself is handled with dz > 0.
+  std::vector<Eigen::Vector2i> forward;
+  for (int dx = 0; dx <= 2; ++dx)
+    for (int dy = -2; dy <= 2; ++dy)
+      if (dx > 0 || dy > 0) forward.emplace_back(dx, dy);
+  for (std::uint32_t k = 0; k < columns; ++k) {
+    const std::uint32_t begin = column_first[k], end = column_first[k + 1];
+    for (std::uint32_t a = begin; a < end; ++a)
+      for (std::uint32_t b = a + 1; b < end && coordinate[b].z() - coordinate[a].z() <= 2; ++b) try_join(a, b);
+    const Eigen::Vector3i& c = coordinate[begin];
+    for (const Eigen::Vector2i& offset : forward) {
+      const std::int64_t found = column_table.find(detail::voxel_key(c.x() + offset.x(), c.y() + offset.y(), 0));
+      if (found < 0) continue;
+      const std::uint32_t other_begin = column_first[static_cast<std::size_t>(found)];
+      const std::uint32_t other_end = column_first[static_cast<std::size_t>(found) + 1];
+      std::uint32_t low = other_begin;  // first cell of the other column not below z - 2 (z rises with a)
+      for (std::uint32_t a = begin; a < end; ++a) {
+        const int z = coordinate[a].z();
+        while (low < other_end && coordinate[low].z() < z - 2) ++low;
+        for (std::uint32_t b = low; b < other_end && coordinate[b].z() <= z + 2; ++b) try_join(a, b);
+      }
+    }
   }
-  std::unordered_map<std::uint32_t, std::uint32_t> cluster_of_root;
+  std::vector<std::int32_t> cluster_of_root(cells, -1);
   std::vector<std::vector<std::uint32_t>> clusters;
-  for (std::uint32_t a = 0; a < cells.size(); ++a) {
+  for (std::uint32_t a = 0; a < cells; ++a) {
     const std::uint32_t root = sets.find(a);
-    auto [it, inserted] = cluster_of_root.try_emplace(root, static_cast<std::uint32_t>(clusters.size()));
-    if (inserted) clusters.emplace_back();
-    for (const std::uint32_t i : cells[a].members) clusters[it->second].push_back(candidates[i]);
+    if (cluster_of_root[root] < 0) {
+      cluster_of_root[root] = static_cast<std::int32_t>(clusters.size());
+      clusters.emplace_back();
+    }
+    auto& cluster = clusters[static_cast<std::size_t>(cluster_of_root[root])];
+    for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) cluster.push_back(candidates[keyed[i].second]);
   }
   return clusters;
 }

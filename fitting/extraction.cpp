@@ -151,6 +151,13 @@ void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::ve
 
 ExtractionResult extract_elements(const PointCloud& cloud, const ExtractionOptions& options,
                                   const std::vector<std::uint32_t>& labels) {
+  return detail::extract_elements_of_points(cloud.positions.cast<double>(), cloud, options, labels);
+}
+
+namespace detail {
+
+ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
+                                            const ExtractionOptions& options, const std::vector<std::uint32_t>& labels) {
   const auto start = Clock::now();
   if (options.semantic_mode == SemanticMode::Labels && labels.size() != cloud.size())
     throw Error("labels semantic mode: " + std::to_string(labels.size()) + " labels for " +
@@ -158,7 +165,6 @@ ExtractionResult extract_elements(const PointCloud& cloud, const ExtractionOptio
   if (!(options.up.norm() > 0.0) || !options.up.allFinite())
     throw Error("extraction option 'up' must be a finite non-zero vector");
   const Eigen::Vector3d up = options.up.normalized();
-  const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
 
   ExtractionResult result;
   // Range limits around the sensor (REFERENCE.md: HDL-64E 2-80 m).
@@ -264,9 +270,13 @@ ExtractionResult extract_elements(const PointCloud& cloud, const ExtractionOptio
   } else if (!result.has_ground) {
     result.status = ExtractionStatus::NoGround;
     result.message = "no ground found; planes, lines and objects were still extracted";
+  } else if (result.elements.size() == 1) {
+    result.message = "only the ground was found: no plane, line or cluster passed the size tests among the " +
+                     std::to_string(in_range.size() - result.elements.front().point_indices.size()) + " other points";
   }
   result.timings_ms["extraction"] = detail::elapsed_ms(start);
   return result;
 }
 
+}  // namespace detail
 }  // namespace quadrix

@@ -76,6 +76,11 @@ inline std::uint64_t voxel_key(std::int64_t x, std::int64_t y, std::int64_t z) {
          (static_cast<std::uint64_t>(z + offset) & mask);
 }
 
+/// extract_elements on `points` = cloud.positions as doubles (the caller already holds them), so a
+/// modelling run converts the cloud once.
+ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
+                                            const ExtractionOptions& options, const std::vector<std::uint32_t>& labels);
+
 /// CGAL Shape_detection region growing of planes on `candidates` (k nearest neighbours, PCA
 /// normals); defined in cgal_shape_detection.cpp. Returns the point-index sets of the regions.
 std::vector<std::vector<std::uint32_t>> cgal_region_growing_planes(const Eigen::Matrix3Xd& points,

@@ -20,6 +20,7 @@ namespace quadrix {
 /// Options of the modelling step; defaults are the paper's (§"Implementation Details").
 struct ModellingOptions {
   std::string fitter = "statistical";    ///< registry name of the QuadricFitter (make_quadric_fitter)
+  int maximum_fit_points = 4000;         ///< larger elements (ground, facades) hand the fitter an evenly strided subsample of at most this many points; the record's statistical pose still uses every point (0: no cap)
   int quadrics_per_class = 50;           ///< K_e: quadrics kept per semantic class (paper 50)
   int augmentation_threshold = 60;       ///< delta_a: augment when fewer quadrics than this (paper 60)
   int augmented_elements_per_class = 10; ///< K_a: largest elements per class that are down-sampled (paper 10)
