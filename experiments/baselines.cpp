@@ -78,7 +78,10 @@ BaselineResult run_baseline(const std::string& method, const PointCloud& source,
       result.timings_ms["total"] = 0.0;
       return result;
     }
-    return entry.second(source, target, options);
+    const double cpu_start = baselines_detail::thread_cpu_ms();
+    BaselineResult result = entry.second(source, target, options);
+    result.cpu_ms = baselines_detail::thread_cpu_ms() - cpu_start;
+    return result;
   }
   std::string known;
   for (const auto& entry : registry) known += (known.empty() ? "" : ", ") + entry.first;

@@ -54,6 +54,9 @@ struct BaselineResult {
   std::string message;                  ///< why not solved, or a short summary (points, matches, inliers)
   /// Wall times, ms: "downsample", "normals", "features", "registration" (matching + estimation), "total".
   std::map<std::string, double> timings_ms;
+  /// CPU time of the calling thread for the whole call, ms: on a loaded machine the fairer cost; equal
+  /// to the work done when threads = 1, an undercount when OpenMP workers also ran.
+  double cpu_ms = 0.0;
   /// Counts: "source_points" / "target_points" after down-sampling, "inliers" (down-sampled source
   /// points within max_correspondence_distance of a down-sampled target point after the transform).
   std::map<std::string, double> counts;

@@ -5,6 +5,7 @@
 #include "experiments/baselines.h"
 
 #include <chrono>
+#include <ctime>
 
 namespace quadrix::baselines_detail {
 
@@ -19,6 +20,13 @@ BaselineResult run_pcl_prerejective(const PointCloud& source, const PointCloud& 
 
 /// Fewest down-sampled points per cloud a baseline attempts to register (3 for a rigid transform).
 constexpr std::size_t minimum_points = 3;
+
+/// CPU time consumed so far by the calling thread, ms (CLOCK_THREAD_CPUTIME_ID).
+inline double thread_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
+}
 
 /// Wall-clock stopwatch for the per-stage timings.
 class Stopwatch {
