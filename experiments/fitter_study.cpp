@@ -2,6 +2,7 @@
 // CSV / Markdown / SVG writers.
 #include "experiments/fitter_study.h"
 
+#include "experiments/study_report.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 
@@ -532,34 +533,10 @@ FitterStudyResult run_fitter_study(const FitterStudyOptions& options, const Stud
 
 namespace {
 
-std::string number(double value, int precision = 6) {
-  if (!std::isfinite(value)) return "";
-  std::ostringstream out;
-  out << std::setprecision(precision) << value;
-  return out.str();
-}
-
-std::string fixed(double value, int decimals) {
-  if (!std::isfinite(value)) return "–";
-  std::ostringstream out;
-  out << std::fixed << std::setprecision(decimals) << value;
-  return out.str();
-}
-
-double median(std::vector<double> values) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
-  if (values.empty()) return kNaN;
-  const std::size_t middle = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + middle, values.end());
-  return values[middle];
-}
-
-double percentile(std::vector<double> values, double fraction) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
-  if (values.empty()) return kNaN;
-  std::sort(values.begin(), values.end());
-  return values[std::min(values.size() - 1, static_cast<std::size_t>(fraction * static_cast<double>(values.size())))];
-}
+using report::fixed;
+using report::median;
+using report::number;
+using report::percentile;
 
 /// Hinted fit returned a quadric of the requested family.
 bool family_ok(const FitterStudyRow& row) {
@@ -597,7 +574,7 @@ std::vector<double> distinct(const FitterStudyResult& result, double FitterStudy
   return {values.begin(), values.end()};
 }
 
-const std::array<const char*, 8> kPalette = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"};
+using report::kPalette;
 
 }  // namespace
 
