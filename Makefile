@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= 2
 CMAKE_ARGS ?=
 
-.PHONY: all setup configure build test demo clean train-fitter papers
+.PHONY: all setup configure build test demo clean train-fitter papers study-refiners
 
 all: build
 
@@ -25,6 +25,12 @@ demo: build
 clean:
 	rm -rf $(BUILD_DIR)
 
+# Regenerates the committed refiner study (papers/studies/refiners.{md,csv,svg}, issue 7) with its
+# fixed seeds; needs ../shared/data for the KITTI part (skipped with a note when absent).
+study-refiners: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target quadrix
+	$(BUILD_DIR)/experiments/quadrix compare-refiners --out papers/studies
+
 # Trains the learned fitter (fitting/training/train_learned_fitter.py) on synthetic segments and
 # exports its weights into fitting/models/learned_fitter/. Training only: build and tests never run it.
 # Uses Debian's python3-torch/python3-numpy via /usr/bin/python3 (installed here when missing).
@@ -34,13 +40,16 @@ train-fitter:
 	/usr/bin/python3 fitting/training/train_learned_fitter.py
 
 # Regenerates papers/quadricsreg/ (results/ and the page README.md) from a clean build: `quadrix bench`
-# on every pair of $(DATA_DIR)/pairs.tsv with every method, the KITTI loop closures under random yaw
+# on every pair of $(DATA_DIR)/pairs.tsv with every method, the six KITTI loop closures under random yaw
 # (--yaw-range 180 --trials 10), one run per row of the paper's ablation table, then `quadrix paper`.
 # Several CPU-minutes on 2 cores.
 DATA_DIR ?= ../shared/data
 PAPER_DIR = papers/quadricsreg
 PAPER_METHODS = quadrix,open3d-ransac,open3d-fgr,pcl-prerejective
 PAPER_TRIALS ?= 10
+# The baselines take about a minute per pair on 2 loaded cores, so the yaw trials run Quadrix only by
+# default (FPFH features are rotation invariant; the baselines run on every unperturbed pair above).
+PAPER_YAW_METHODS ?= quadrix
 ABLATION_TRIALS ?= 3
 PAPER_ABLATIONS = default no-semantics no-central no-linear-center no-planar-center no-augmented-points \
   ke30 ke40 ke60 ks15 ks25 dm-0.2 dm-0.8 dm-0.2-0.8 dm-0.2-0.6-0.8 dm-0.2-0.4-0.6-0.8-1.0 \
@@ -48,11 +57,11 @@ PAPER_ABLATIONS = default no-semantics no-central no-linear-center no-planar-cen
 papers: build
 	$(BUILD_DIR)/experiments/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --method $(PAPER_METHODS) --jobs $(JOBS) \
 	  --title "Every shared pair, every method" --out $(PAPER_DIR)/results/pairs
-	$(BUILD_DIR)/experiments/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --kind loop_closure --method $(PAPER_METHODS) \
+	$(BUILD_DIR)/experiments/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --ids '^kitti00_lc' --method $(PAPER_YAW_METHODS) \
 	  --yaw-range 180 --trials $(PAPER_TRIALS) --seed 1 --jobs $(JOBS) \
 	  --title "KITTI-00 loop closures, random yaw in [-180, 180] deg" --out $(PAPER_DIR)/results/kitti-lc-yaw180
 	for ablation in $(PAPER_ABLATIONS); do \
-	  $(BUILD_DIR)/experiments/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --kind loop_closure --method quadrix \
+	  $(BUILD_DIR)/experiments/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --ids '^kitti00_lc' --method quadrix \
 	    --yaw-range 180 --trials $(ABLATION_TRIALS) --seed 2 --jobs $(JOBS) --no-progress --ablation $$ablation \
 	    --title "Ablation $$ablation: KITTI-00 loop closures, random yaw" --out $(PAPER_DIR)/results/ablation-$$ablation || exit 1; \
 	done
