@@ -36,76 +36,50 @@ TargetCenterIndex index_target_centers(const std::vector<QuadricRecord>& target)
   return index;
 }
 
-// One source's same-label targets by increasing (distance, target index), fetched from the tree
-// in growing batches so most sources touch only their few nearest targets.
-struct SourceQueue {
-  const LabelledCenters* group = nullptr;
-  Eigen::Vector3d moved = Eigen::Vector3d::Zero();
-  std::vector<std::pair<double, std::size_t>> fetched;  // (distance, target record), sorted
-  std::size_t cursor = 0;
-  std::size_t batch = 0;
-
-  // The next not-yet-offered target within max_distance, or false when there is none.
-  bool next(const std::vector<QuadricRecord>& target, double max_distance, std::pair<double, std::size_t>& out) {
-    while (cursor == fetched.size()) {
-      const std::size_t available = group->index.size();
-      if (fetched.size() >= available) return false;
-      // More than already fetched (which may exceed the last batch through ties), so the set grows.
-      batch = std::min(available, std::max({std::size_t{4}, 2 * batch, fetched.size() + 1}));
-      const std::size_t skip = fetched.size();
-      fetched.clear();
-      // Widen the k nearest to everything as near as the k-th, so targets tied at the batch
-      // boundary are all fetched and the (distance, index) order stays exact across batches.
-      const std::vector<Neighbor> nearest = group->index.nearest(moved, batch);
-      const double reach = nearest.back().distance * (1.0 + 1e-9) + 1e-12;
-      for (const Neighbor& neighbor : group->index.within_radius(moved, reach)) {
-        const std::size_t j = group->record_indices[neighbor.index];
-        fetched.emplace_back((moved - target[j].full_center).norm(), j);  // exact distance, as the brute force
-      }
-      std::sort(fetched.begin(), fetched.end());
-      cursor = skip;
-    }
-    out = fetched[cursor++];
-    return out.first <= max_distance;
-  }
-};
-
 // SNN of Algorithm 1 against a prepared target index: the greedy one-to-one assignment by
 // increasing (distance, source, target) over all same-label pairs, computed lazily with a heap
-// holding each unmatched source's nearest not-yet-taken target. Equal to sorting every pair and
-// taking them greedily (the previous quadratic form), in O((n + m) log m) for typical scenes.
+// holding each unmatched source's nearest not-yet-taken target (a k-d tree query that skips taken
+// targets). Equal to sorting every same-label pair and taking them greedily (the quadratic form
+// this replaced: seconds and hundreds of MB with thousands of augmented points per label).
 std::vector<RecordCorrespondence> nearest_pairs(const std::vector<QuadricRecord>& source,
                                                 const std::vector<QuadricRecord>& target,
                                                 const TargetCenterIndex& target_index,
                                                 const Eigen::Isometry3d& transform, double max_distance) {
-  using Entry = std::tuple<double, std::size_t, std::size_t>;  // (distance, source, target)
+  std::map<std::uint32_t, std::vector<bool>> taken;  // per label, per indexed centre
+  for (const auto& [label, group] : target_index) taken[label].assign(group.index.size(), false);
+  std::vector<const LabelledCenters*> groups(source.size(), nullptr);
+  std::vector<std::vector<bool>*> taken_of_source(source.size(), nullptr);
+  std::vector<Eigen::Vector3d> moved(source.size());
+  using Entry = std::tuple<double, std::size_t, std::size_t>;  // (distance, source, indexed centre of its label)
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
-  std::vector<SourceQueue> queues(source.size());
+  // Pushes source i's nearest untaken same-label target when within max_distance.
+  const auto offer = [&](std::size_t i) {
+    const std::optional<Neighbor> nearest = groups[i]->index.nearest_not_excluded(moved[i], *taken_of_source[i]);
+    if (!nearest) return;
+    const std::size_t j = groups[i]->record_indices[nearest->index];
+    const double distance = (moved[i] - target[j].full_center).norm();  // exact, as the brute-force definition
+    if (distance <= max_distance) heap.emplace(distance, i, nearest->index);
+  };
   for (std::size_t i = 0; i < source.size(); ++i) {
     const auto group = target_index.find(source[i].label);
     if (group == target_index.end()) continue;
-    queues[i].group = &group->second;
-    queues[i].moved = transform * source[i].full_center;
-    std::pair<double, std::size_t> first;
-    if (queues[i].next(target, max_distance, first)) heap.emplace(first.first, i, first.second);
+    groups[i] = &group->second;
+    taken_of_source[i] = &taken[source[i].label];
+    moved[i] = transform * source[i].full_center;
+    offer(i);
   }
-  std::vector<bool> target_used(target.size(), false);
   std::vector<RecordCorrespondence> pairs;
   while (!heap.empty()) {
-    const auto [distance, i, j] = heap.top();
+    const auto [distance, i, local] = heap.top();
     heap.pop();
-    if (!target_used[j]) {
-      target_used[j] = true;
-      pairs.push_back({i, j});
+    (void)distance;
+    std::vector<bool>& label_taken = *taken_of_source[i];
+    if (label_taken[local]) {
+      offer(i);  // its target went to a nearer pair: its next nearest untaken one
       continue;
     }
-    std::pair<double, std::size_t> candidate;
-    while (queues[i].next(target, max_distance, candidate)) {
-      if (target_used[candidate.second]) continue;
-      heap.emplace(candidate.first, i, candidate.second);
-      break;
-    }
-    (void)distance;
+    label_taken[local] = true;
+    pairs.push_back({i, groups[i]->record_indices[local]});
   }
   return pairs;
 }

@@ -40,6 +40,35 @@ std::vector<Neighbor> sorted_neighbors(const std::vector<std::pair<std::size_t, 
   return neighbors;
 }
 
+// nanoflann result set keeping the nearest point not excluded, ties by the lowest index. Its
+// worst distance sits one ulp above the best so points at exactly the best distance are still
+// offered (nanoflann only offers points strictly nearer than the worst distance).
+class NearestNotExcluded {
+ public:
+  explicit NearestNotExcluded(const std::vector<bool>& excluded) : excluded_(excluded) {}
+  bool full() const { return found_; }
+  double worstDist() const { return found_ ? std::nextafter(best_squared_, std::numeric_limits<double>::infinity()) : std::numeric_limits<double>::infinity(); }
+  bool addPoint(double squared, std::size_t index) {
+    if (excluded_[index]) return true;
+    if (!found_ || squared < best_squared_ || (squared == best_squared_ && index < best_index_)) {
+      found_ = true;
+      best_squared_ = squared;
+      best_index_ = index;
+    }
+    return true;
+  }
+  std::optional<Neighbor> result() const {
+    if (!found_) return std::nullopt;
+    return Neighbor{best_index_, std::sqrt(best_squared_)};
+  }
+
+ private:
+  const std::vector<bool>& excluded_;
+  bool found_ = false;
+  double best_squared_ = 0.0;
+  std::size_t best_index_ = 0;
+};
+
 }  // namespace
 
 struct PointIndex::Tree {
@@ -76,6 +105,16 @@ std::vector<Neighbor> PointIndex::nearest(const Eigen::Vector3d& query, std::siz
   pairs.reserve(found);
   for (std::size_t n = 0; n < found; ++n) pairs.emplace_back(indices[n], squared[n]);
   return sorted_neighbors(pairs);
+}
+
+std::optional<Neighbor> PointIndex::nearest_not_excluded(const Eigen::Vector3d& query, const std::vector<bool>& excluded) const {
+  if (excluded.size() != size())
+    throw Error("PointIndex::nearest_not_excluded: " + std::to_string(excluded.size()) + " exclusion flags for " +
+                std::to_string(size()) + " points (expected one per point)");
+  if (size() == 0) return std::nullopt;
+  NearestNotExcluded result(excluded);
+  tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  return result.result();
 }
 
 std::vector<Neighbor> PointIndex::within_radius(const Eigen::Vector3d& query, double radius) const {

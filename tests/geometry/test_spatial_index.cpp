@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 #include <random>
 
 namespace quadrix {
@@ -51,6 +52,37 @@ TEST(PointIndex, NearestAndRadiusMatchBruteForce) {
       for (std::size_t n = 0; n < within.size(); ++n) EXPECT_EQ(within[n].index, expected[n].index);
     }
   }
+}
+
+TEST(PointIndex, NearestNotExcludedMatchesBruteForceWithTies) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 30; ++trial) {
+    const bool grid = trial % 2 == 0;
+    const int count = std::uniform_int_distribution<int>(1, 300)(rng);
+    Eigen::Matrix3Xd points(3, count);
+    for (int i = 0; i < count; ++i)
+      for (int d = 0; d < 3; ++d)
+        points(d, i) = grid ? std::uniform_int_distribution<int>(-2, 2)(rng) : std::uniform_real_distribution<double>(-10, 10)(rng);
+    const PointIndex index(points);
+    std::vector<bool> excluded(count);
+    const double fraction = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+    for (int i = 0; i < count; ++i) excluded[i] = std::bernoulli_distribution(fraction)(rng);
+    const Eigen::Vector3d query = grid ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(Eigen::Vector3d::Random() * 10.0);
+    std::optional<Neighbor> expected;
+    for (const Neighbor& neighbor : brute_force(points, query))
+      if (!excluded[neighbor.index]) {
+        expected = neighbor;
+        break;
+      }
+    const std::optional<Neighbor> actual = index.nearest_not_excluded(query, excluded);
+    ASSERT_EQ(actual.has_value(), expected.has_value()) << "trial " << trial;
+    if (expected) {
+      EXPECT_EQ(actual->index, expected->index) << "trial " << trial;  // ties by lowest index
+      EXPECT_NEAR(actual->distance, expected->distance, 1e-12);
+    }
+  }
+  const PointIndex index(Eigen::Matrix3Xd::Zero(3, 3));
+  EXPECT_THROW(index.nearest_not_excluded(Eigen::Vector3d::Zero(), std::vector<bool>(2)), Error);
 }
 
 TEST(PointIndex, EmptyIndexAndBadInput) {
