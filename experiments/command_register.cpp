@@ -36,17 +36,6 @@ struct RegisterCommandOptions {
   std::string refiner;         ///< refiner override (ceres | nlopt)
 };
 
-// Resolves a preset name (or auto) for one cloud; returns the name and appends the reason to `notes`.
-std::string resolve_preset(const std::string& requested, const PointCloud& cloud, const char* side, std::string& notes) {
-  if (requested != "auto") {
-    registration_preset(requested);  // unknown names are an Error listing the valid ones
-    return requested;
-  }
-  const SensorGuess guess = guess_sensor_preset(cloud);
-  notes += std::string(notes.empty() ? "" : "; ") + side + " auto: " + guess.reason;
-  return guess.preset;
-}
-
 void run(const RegisterCommandOptions& options) {
   using Clock = std::chrono::steady_clock;
   if (!options.config.empty() && !std::filesystem::exists(options.config))
@@ -64,12 +53,9 @@ void run(const RegisterCommandOptions& options) {
   const double load_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 
   std::string notes;
-  const std::string source_preset =
-      resolve_preset(options.source_preset.empty() ? options.preset : options.source_preset, source, "source", notes);
-  const std::string target_preset =
-      resolve_preset(options.target_preset.empty() ? options.preset : options.target_preset, target, "target", notes);
-  RegistrationOptions registration = load_registration_preset(source_preset);
-  registration.target_extraction = load_registration_preset(target_preset).target_extraction;
+  RegistrationOptions registration = resolve_registration_options(
+      options.source_preset.empty() ? options.preset : options.source_preset, source,
+      options.target_preset.empty() ? options.preset : options.target_preset, target, &notes);
   if (!options.config.empty()) apply_registration_config(options.config, registration);
   if (!options.refiner.empty()) {
     make_refiner(options.refiner);
@@ -80,7 +66,7 @@ void run(const RegisterCommandOptions& options) {
   const double total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 
   std::printf("quadrix register %s -> %s  (presets: source %s, target %s)\n", options.source.c_str(), options.target.c_str(),
-              source_preset.c_str(), target_preset.c_str());
+              registration.source_extraction.preset.c_str(), registration.target_extraction.preset.c_str());
   if (!notes.empty()) std::printf("%s\n", notes.c_str());
   const Eigen::Matrix4d matrix = result.transform.matrix();
   for (int r = 0; r < 4; ++r)
@@ -109,8 +95,8 @@ void run(const RegisterCommandOptions& options) {
     RegistrationReportContext context;
     context.source_path = options.source;
     context.target_path = options.target;
-    context.source_preset = source_preset;
-    context.target_preset = target_preset;
+    context.source_preset = registration.source_extraction.preset;
+    context.target_preset = registration.target_extraction.preset;
     context.preset_notes = notes;
     context.load_ms = load_ms;
     context.total_ms = total_ms;

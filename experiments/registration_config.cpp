@@ -3,14 +3,22 @@
 
 #include "geometry/error.h"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <type_traits>
+#include <tuple>
+#include <unordered_map>
 #include <sstream>
 
 namespace quadrix {
@@ -61,7 +69,7 @@ void apply_extraction(const YAML::Node& node, const std::string& file, Extractio
            if (!value.IsSequence() || value.size() != 3) throw file_error(file, "key '" + key + "' must be a list of 3 numbers");
            for (int i = 0; i < 3; ++i) e.up[i] = scalar<double>(value[i], file, key);
            if (!(e.up.norm() > 0.0)) throw file_error(file, "key '" + key + "' must not be the zero vector");
-           e.up.normalize();
+           if (std::abs(e.up.norm() - 1.0) > 1e-12) e.up.normalize();  // a unit vector is kept bit for bit
          }},
         {"ground",
          [&e, file](const YAML::Node& value, const std::string& key) {
@@ -210,11 +218,237 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
     throw file_error(path, "key 'estimation.refiner': unknown refiner '" + o.estimation.refiner + "'");
 }
 
+std::string registration_config_yaml(const RegistrationOptions& options, const std::string& side) {
+  if (side != "source" && side != "target")
+    throw Error("registration_config_yaml: side must be source or target, got '" + side + "'");
+  const ExtractionOptions& e = side == "source" ? options.source_extraction : options.target_extraction;
+  YAML::Emitter out;
+  // Doubles as their shortest exact decimal (std::to_chars): "0.15", and reading it back gives the same double.
+  const auto text = [](const auto& value) {
+    if constexpr (std::is_floating_point_v<std::decay_t<decltype(value)>>) {
+      std::array<char, 32> buffer{};
+      const auto end = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value).ptr;
+      return std::string(buffer.data(), end);
+    } else {
+      return value;
+    }
+  };
+  const auto key_value = [&out, &text](const char* key, const auto& value) { out << YAML::Key << key << YAML::Value << text(value); };
+  const auto list = [&out, &text](const char* key, const std::vector<double>& values) {
+    out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const double value : values) out << text(value);
+    out << YAML::EndSeq;
+  };
+  const auto begin = [&out](const char* key) { out << YAML::Key << key << YAML::Value << YAML::BeginMap; };
+  out << YAML::BeginMap;
+  begin("extraction");
+  key_value("minimum_range", e.minimum_range);
+  key_value("maximum_range", e.maximum_range);
+  key_value("static_scan", e.static_scan);
+  list("up", {e.up.x(), e.up.y(), e.up.z()});
+  begin("ground");
+  key_value("inlier_distance", e.ground.inlier_distance);
+  key_value("max_slope_deg", e.ground.max_slope_deg);
+  key_value("max_step_height", e.ground.max_step_height);
+  out << YAML::EndMap;
+  begin("planes");
+  key_value("voxel_size", e.planes.voxel_size);
+  key_value("merge_distance", e.planes.merge_distance);
+  key_value("normal_cosine", e.planes.normal_cosine);
+  key_value("eigenvalue_ratio", e.planes.eigenvalue_ratio);
+  key_value("minimum_plane_points", e.planes.minimum_plane_points);
+  out << YAML::EndMap;
+  begin("clusters");
+  key_value("radius", e.clusters.radius);
+  key_value("minimum_points", e.clusters.minimum_points);
+  key_value("maximum_points", e.clusters.maximum_points);
+  key_value("maximum_extent", e.clusters.maximum_extent);
+  out << YAML::EndMap;
+  begin("lines");
+  key_value("inlier_distance", e.lines.inlier_distance);
+  key_value("minimum_points", e.lines.minimum_points);
+  key_value("minimum_length", e.lines.minimum_length);
+  out << YAML::EndMap;
+  begin("shapes");
+  key_value("simplification_voxel", e.shapes.simplification_voxel);
+  key_value("epsilon", e.shapes.epsilon);
+  key_value("cluster_epsilon", e.shapes.cluster_epsilon);
+  key_value("minimum_points", e.shapes.minimum_points);
+  key_value("normal_threshold", e.shapes.normal_threshold);
+  out << YAML::EndMap << YAML::EndMap;
+  begin("modelling");
+  key_value("fitter", options.modelling.fitter);
+  key_value("quadrics_per_class", options.modelling.quadrics_per_class);
+  key_value("augmentation_threshold", options.modelling.augmentation_threshold);
+  key_value("augmented_elements_per_class", options.modelling.augmented_elements_per_class);
+  key_value("augmentation_voxel", options.modelling.augmentation_voxel);
+  out << YAML::EndMap;
+  begin("matching");
+  key_value("top_k_similar", options.correspondences.top_k_similar);
+  key_value("match_augmented_points", options.correspondences.match_augmented_points);
+  list("thresholds", options.graphs.thresholds);
+  key_value("clique_time_limit_ms", options.clique_time_limit_ms);
+  key_value("clique_threads", options.clique_threads);
+  out << YAML::EndMap;
+  begin("estimation");
+  key_value("refiner", options.estimation.refiner);
+  key_value("max_iterations", options.estimation.refinement.max_iterations);
+  key_value("function_tolerance", options.estimation.refinement.function_tolerance);
+  key_value("manhattan_tolerance_degrees", options.estimation.manhattan_tolerance_degrees);
+  key_value("augment_non_central", options.estimation.augment_non_central);
+  key_value("use_ground_constraint", options.estimation.use_ground_constraint);
+  key_value("ground_weight", options.estimation.ground_weight);
+  key_value("minimum_inliers", options.estimation.minimum_inliers);
+  out << YAML::EndMap;
+  begin("selection");
+  key_value("dcs_phi", options.selection.dcs_phi);
+  key_value("manhattan_tolerance_degrees", options.selection.manhattan_tolerance_degrees);
+  out << YAML::EndMap;
+  begin("ambiguity");
+  key_value("score_ratio", options.ambiguity.score_ratio);
+  key_value("translation_disagreement", options.ambiguity.translation_disagreement);
+  key_value("rotation_disagreement_degrees", options.ambiguity.rotation_disagreement_degrees);
+  out << YAML::EndMap << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
 RegistrationOptions load_registration_preset(const std::string& name) {
   RegistrationOptions options = registration_preset(name);
   const std::filesystem::path file = std::filesystem::path(registration_presets_directory()) / (name + ".yaml");
   if (std::filesystem::exists(file)) apply_registration_config(file.string(), options);
   return options;
+}
+
+namespace {
+
+// Point statistics of one voxel (count, sum, sum of outer products) for its PCA normal.
+struct VoxelMoments {
+  double count = 0.0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+};
+
+// A planar voxel: unit normal (sign arbitrary), centre and point count.
+struct PlanarVoxel {
+  Eigen::Vector3d normal;
+  Eigen::Vector3d center;
+  double weight;
+};
+
+// PCA normals of the planar voxels of (at most ~100 k evenly strided points of) the cloud.
+std::vector<PlanarVoxel> planar_voxels(const PointCloud& cloud, double voxel_size) {
+  const std::size_t stride = std::max<std::size_t>(1, cloud.size() / 100000);
+  std::unordered_map<std::int64_t, VoxelMoments> voxels;
+  for (std::size_t i = 0; i < cloud.size(); i += stride) {
+    const Eigen::Vector3d p = cloud.point(i);
+    if (!p.allFinite()) continue;
+    const Eigen::Vector3d cell = (p / voxel_size).array().floor();
+    if ((cell.array().abs() > 1e5).any()) continue;
+    const std::int64_t key = (static_cast<std::int64_t>(cell.x()) + (1 << 20)) * (std::int64_t{1} << 42) +
+                             (static_cast<std::int64_t>(cell.y()) + (1 << 20)) * (std::int64_t{1} << 21) +
+                             (static_cast<std::int64_t>(cell.z()) + (1 << 20));
+    VoxelMoments& voxel = voxels[key];
+    voxel.count += 1.0;
+    voxel.sum += p;
+    voxel.outer += p * p.transpose();
+  }
+  std::vector<PlanarVoxel> planar;
+  for (const auto& [key, voxel] : voxels) {
+    (void)key;
+    if (voxel.count < 8.0) continue;
+    const Eigen::Vector3d mean = voxel.sum / voxel.count;
+    const Eigen::Matrix3d covariance = voxel.outer / voxel.count - mean * mean.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+    const Eigen::Vector3d values = solver.eigenvalues();  // ascending
+    if (!(values(1) > 0.0) || values(0) > 0.04 * values(1) || values(1) < 0.01 * values(2)) continue;  // a patch, not a line
+    planar.push_back({solver.eigenvectors().col(0), mean, voxel.count});
+  }
+  // Hash-map order is not deterministic across library versions: sort for reproducible candidates.
+  std::sort(planar.begin(), planar.end(), [](const PlanarVoxel& a, const PlanarVoxel& b) {
+    return std::tie(a.center.x(), a.center.y(), a.center.z()) < std::tie(b.center.x(), b.center.y(), b.center.z());
+  });
+  return planar;
+}
+
+// Weight of the planar voxels whose normal is within the cone |n . direction| >= cosine.
+double normal_support(const std::vector<PlanarVoxel>& voxels, const Eigen::Vector3d& direction, double cosine) {
+  double support = 0.0;
+  for (const PlanarVoxel& voxel : voxels)
+    if (std::abs(voxel.normal.dot(direction)) >= cosine) support += voxel.weight;
+  return support;
+}
+
+}  // namespace
+
+UpDirectionEstimate estimate_up_direction(const PointCloud& cloud) {
+  constexpr double kDegrees = 180.0 / M_PI;
+  UpDirectionEstimate estimate;
+  std::vector<double> ranges;
+  const std::size_t stride = std::max<std::size_t>(1, cloud.size() / 20000);
+  for (std::size_t i = 0; i < cloud.size(); i += stride)
+    if (cloud.point(i).allFinite()) ranges.push_back(cloud.point(i).norm());
+  if (ranges.empty()) {
+    estimate.reason = "no finite point: +z assumed";
+    return estimate;
+  }
+  std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2), ranges.end());
+  const double voxel_size = std::clamp(ranges[ranges.size() / 2] / 15.0, 0.1, 1.0);
+  const std::vector<PlanarVoxel> voxels = planar_voxels(cloud, voxel_size);
+  double total = 0.0;
+  for (const PlanarVoxel& voxel : voxels) total += voxel.weight;
+  if (voxels.size() < 20) {
+    estimate.reason = std::to_string(voxels.size()) + " planar voxels (fewer than 20): +z assumed";
+    return estimate;
+  }
+  const double cone = std::cos(10.0 / kDegrees);
+  const double upright_limit = std::cos(45.0 / kDegrees);
+  // Candidate directions: the normals of (at most 500 evenly chosen) planar voxels.
+  const std::size_t candidate_stride = std::max<std::size_t>(1, voxels.size() / 500);
+  Eigen::Vector3d best_upright = Eigen::Vector3d::Zero(), best_overall = Eigen::Vector3d::Zero();
+  double upright_support = 0.0, overall_support = 0.0;
+  for (std::size_t n = 0; n < voxels.size(); n += candidate_stride) {
+    const Eigen::Vector3d& candidate = voxels[n].normal;
+    const double support = normal_support(voxels, candidate, cone);
+    if (support > overall_support) {
+      overall_support = support;
+      best_overall = candidate;
+    }
+    if (std::abs(candidate.z()) >= upright_limit && support > upright_support) {
+      upright_support = support;
+      best_upright = candidate;
+    }
+  }
+  const bool upright = upright_support > 0.0;
+  Eigen::Vector3d up = upright ? best_upright : best_overall;
+  // Refine: the weighted mean of the sign-aligned normals within 10 deg, twice.
+  for (int round = 0; round < 2; ++round) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const PlanarVoxel& voxel : voxels) {
+      const double alignment = voxel.normal.dot(up);
+      if (std::abs(alignment) >= cone) sum += (alignment < 0.0 ? -1.0 : 1.0) * voxel.weight * voxel.normal;
+    }
+    if (sum.norm() > 0.0) up = sum.normalized();
+  }
+  if (upright) {
+    if (up.z() < 0.0) up = -up;
+  } else {
+    // Orient so that most of the mode's planar points lie below the sensor at the origin.
+    double below = 0.0, above = 0.0;
+    for (const PlanarVoxel& voxel : voxels)
+      if (std::abs(voxel.normal.dot(up)) >= cone) (voxel.center.dot(up) < 0.0 ? below : above) += voxel.weight;
+    if (above > below) up = -up;
+  }
+  estimate.found = true;
+  estimate.up = up;
+  estimate.support = normal_support(voxels, up, cone) / total;
+  estimate.tilt_degrees = std::acos(std::clamp(up.z(), -1.0, 1.0)) * kDegrees;
+  std::ostringstream reason;
+  reason.precision(3);
+  reason << "up (" << up.x() << ", " << up.y() << ", " << up.z() << "), tilt " << estimate.tilt_degrees << " deg, "
+         << 100.0 * estimate.support << "% of planar voxels (" << voxel_size << " m) within 10 deg"
+         << (upright ? "" : "; no horizontal mode within 45 deg of +z: the best-supported plane normal, sensor above it");
+  estimate.reason = reason.str();
+  return estimate;
 }
 
 SensorGuess guess_sensor_preset(const PointCloud& cloud) {
@@ -225,6 +459,33 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
     guess.reason = "empty cloud: default preset vlp64";
     return guess;
   }
+  // A platform's own body (more than 10% of the points within 1.5 m, e.g. 3DTK's robot) would
+  // dominate every measurement: measure the scene beyond 2 m, and crop there.
+  std::size_t near_field_points = 0;
+  for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i) near_field_points += cloud.positions.col(i).norm() < 1.5F ? 1 : 0;
+  const double near_field_fraction = static_cast<double>(near_field_points) / static_cast<double>(cloud.size());
+  if (near_field_fraction > 0.1) {
+    PointCloud scene;
+    std::vector<Eigen::Index> far;
+    for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i)
+      if (cloud.positions.col(i).norm() >= 2.0F) far.push_back(i);
+    scene.positions.resize(3, static_cast<Eigen::Index>(far.size()));
+    for (std::size_t n = 0; n < far.size(); ++n) scene.positions.col(static_cast<Eigen::Index>(n)) = cloud.positions.col(far[n]);
+    guess = guess_sensor_preset(scene);
+    guess.point_count = cloud.size();
+    guess.near_field_fraction = near_field_fraction;
+    guess.minimum_range = std::max(2.0, guess.minimum_range);
+    std::ostringstream reason;
+    reason.precision(3);
+    reason << 100.0 * near_field_fraction << "% of the " << cloud.size()
+           << " points lie within 1.5 m (the platform itself): measured beyond 2 m and cropped there; " << guess.reason;
+    guess.reason = reason.str();
+    return guess;
+  }
+  // Rings and the elevation span are properties of the sensor head, so they are measured in the
+  // cloud's own frame (a tilted spinning LiDAR keeps its rings there); the up axis only tells the
+  // extraction where the ground is.
+  guess.up = estimate_up_direction(cloud);
   constexpr double kDegrees = 180.0 / M_PI;
   std::vector<char> azimuth_bins(360, 0);
   std::vector<double> ranges;
@@ -241,6 +502,7 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
     }
     if (range > 10.0) elevations.push_back(std::atan2(p.z(), horizontal) * kDegrees);
   }
+  guess.near_field_fraction = near_field_fraction;
   guess.azimuth_coverage = static_cast<double>(std::count(azimuth_bins.begin(), azimuth_bins.end(), 1)) / 360.0;
   std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2), ranges.end());
   guess.median_range = ranges[ranges.size() / 2];
@@ -295,8 +557,30 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
     guess.preset = "mid360";
     reason << "360 deg coverage and a tall (>= 35 deg) elevation span of a non-repetitive scanner: mid360";
   }
+  guess.minimum_range = extraction_preset(guess.preset).minimum_range;
   guess.reason = reason.str();
   return guess;
+}
+
+RegistrationOptions resolve_registration_options(const std::string& source_preset, const PointCloud& source,
+                                                 const std::string& target_preset, const PointCloud& target,
+                                                 std::string* notes) {
+  // One side: a named preset's options as they are, or auto's guess with the measured up axis.
+  const auto resolve = [&](const std::string& requested, const PointCloud& cloud, const char* side) {
+    if (requested != "auto") return load_registration_preset(requested);
+    const SensorGuess guess = guess_sensor_preset(cloud);
+    RegistrationOptions options = load_registration_preset(guess.preset);
+    if (guess.up.found) options.source_extraction.up = options.target_extraction.up = guess.up.up;
+    if (guess.near_field_fraction > 0.1)  // self-hits of the platform: crop them (its preset's value when larger)
+      options.source_extraction.minimum_range = options.target_extraction.minimum_range =
+          std::max(guess.minimum_range, options.source_extraction.minimum_range);
+    if (notes != nullptr)
+      *notes += std::string(notes->empty() ? "" : "; ") + side + " auto: " + guess.reason + "; " + guess.up.reason;
+    return options;
+  };
+  RegistrationOptions options = resolve(source_preset, source, "source");  // the source side's preset sets the shared stages
+  options.target_extraction = resolve(target_preset, target, "target").target_extraction;
+  return options;
 }
 
 }  // namespace quadrix

@@ -7,6 +7,8 @@
 #include "estimation/registration.h"
 #include "geometry/point_cloud.h"
 
+#include <Eigen/Core>
+
 #include <string>
 #include <vector>
 
@@ -40,9 +42,31 @@ std::string registration_presets_directory();
 /// Throws quadrix::Error naming the file and the key for unknown keys, wrong types or unreadable files.
 void apply_registration_config(const std::string& path, RegistrationOptions& options, const std::string& side = "both");
 
+/// The options in the schema of apply_registration_config (every key it accepts, `extraction` from
+/// `side`: "source" or "target"), as YAML a user can save, edit and pass back with --config;
+/// applying it reproduces every value it lists. Throws quadrix::Error for another side.
+std::string registration_config_yaml(const RegistrationOptions& options, const std::string& side = "source");
+
 /// The preset `name` as the user sees it: registration_preset(name), then its YAML file from
 /// registration_presets_directory() when present (its values mirror the C++ ones; edits take effect).
 RegistrationOptions load_registration_preset(const std::string& name);
+
+/// The up axis of a cloud measured from its planar structure (the `auto` preset's levelling).
+struct UpDirectionEstimate {
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  ///< unit up axis in the cloud's frame (+z when nothing was found)
+  bool found = false;                 ///< a planar mode supported the estimate (else +z is assumed)
+  double support = 0.0;               ///< fraction of the planar-voxel points whose normal is within 10 deg of `up`
+  double tilt_degrees = 0.0;          ///< angle between `up` and +z, degrees
+  std::string reason;                 ///< one line: what was measured and chosen
+};
+
+/// Estimates the up axis from the dominant horizontal structure: PCA normals of planar voxels
+/// (voxel = median range / 15, clamped to 0.1..1 m), the best-supported normal direction within
+/// 45 deg of +z (ground and ceilings of a sensor tilted by less than 45 deg; walls are then at
+/// least 45 deg away), refined as the mean of the normals within 10 deg of it and oriented
+/// toward +z. Without such a mode, the best-supported direction overall, oriented so that most
+/// of its planar points lie below the origin (the sensor stands above the ground).
+UpDirectionEstimate estimate_up_direction(const PointCloud& cloud);
 
 /// Measured properties of a cloud behind the `auto` preset.
 struct SensorGuess {
@@ -53,13 +77,27 @@ struct SensorGuess {
   int ring_count = 0;                 ///< separated elevation bands (0.05 deg bins, >= ~20 points each on average; occupied above half the mean) of points beyond 10 m: the laser rings
   double elevation_span_degrees = 0.0;///< 1st..99th percentile of the elevation angle, degrees
   double median_range = 0.0;          ///< median distance from the origin, m
+  UpDirectionEstimate up;             ///< the measured up axis (for the extraction; the preset rule does not use it)
+  double near_field_fraction = 0.0;   ///< fraction of points within 1.5 m of the origin (a robot's or vehicle's own body)
+  double minimum_range = 0.0;         ///< crop radius auto sets, m: 2 m when near_field_fraction > 10% (self-hits), else the preset's
 };
 
 /// Chooses among the presets by the cloud itself: narrow horizontal field of view (< 50% azimuth
 /// coverage) -> avia; more than 1.5 M points -> monument (static scan); an elevation span (1st..99th
 /// percentile beyond 10 m) under 35 deg is a spinning multi-beam scanner -> vlp64 when dense (>= 60 k
-/// points or >= 48 rings), else vlp16; a taller span -> mid360. The origin is assumed to be the
-/// sensor and +z the up axis (neither is estimated).
+/// points or >= 48 rings), else vlp16; a taller span -> mid360. Angles are measured in the cloud's
+/// own frame (a sensor head's rings stay horizontal there even when it is mounted tilted); the up
+/// axis is estimated separately (estimate_up_direction) for the extraction. The origin is assumed
+/// to be the sensor (not estimated). More than 10% of the points within 1.5 m of it are
+/// the platform's own body: auto then crops everything nearer than 2 m.
 SensorGuess guess_sensor_preset(const PointCloud& cloud);
+
+/// Registration options for a pair: each side's preset by name, or "auto" (guess_sensor_preset,
+/// whose estimated up axis is also set on that side's extraction). Presets load their YAML files
+/// (load_registration_preset). The reasons of every auto choice are appended to `notes` when given.
+/// Throws quadrix::Error for an unknown preset name.
+RegistrationOptions resolve_registration_options(const std::string& source_preset, const PointCloud& source,
+                                                 const std::string& target_preset, const PointCloud& target,
+                                                 std::string* notes = nullptr);
 
 }  // namespace quadrix

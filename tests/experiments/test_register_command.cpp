@@ -9,6 +9,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -140,6 +145,70 @@ TEST(RegistrationConfig, AutoPresetOnRealScans) {
     std::printf("%s: %s\n", file.c_str(), guess.reason.c_str());
     EXPECT_EQ(guess.preset, expected) << file << ": " << guess.reason;
   }
+}
+
+// Rotates every point of `cloud` by `rotation` (a tilted mount of the same sensor).
+PointCloud rotated(PointCloud cloud, const Eigen::Matrix3d& rotation) {
+  cloud.positions = (rotation.cast<float>() * cloud.positions).eval();
+  return cloud;
+}
+
+TEST(RegistrationConfig, AutoPresetMeasuresTheUpAxisOfTiltedScans) {
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/000000.bin");
+  const PointCloud level = read_point_cloud(testing::shared_data_path("kitti00/velodyne/000000.bin"));
+  const UpDirectionEstimate upright = estimate_up_direction(level);
+  std::printf("kitti 000000: %s\n", upright.reason.c_str());
+  ASSERT_TRUE(upright.found);
+  EXPECT_LT(upright.tilt_degrees, 3.0) << upright.reason;  // the HDL-64E is mounted level
+  for (const auto& [axis, degrees] : std::vector<std::pair<Eigen::Vector3d, double>>{
+           {Eigen::Vector3d::UnitX(), 25.0}, {Eigen::Vector3d(1, 1, 0).normalized(), -35.0}, {Eigen::Vector3d::UnitY(), 15.0}}) {
+    const Eigen::Matrix3d tilt = Eigen::AngleAxisd(degrees * M_PI / 180.0, axis).toRotationMatrix();
+    const UpDirectionEstimate estimate = estimate_up_direction(rotated(level, tilt));
+    const double error = std::acos(std::clamp(estimate.up.dot(tilt * upright.up), -1.0, 1.0)) * 180.0 / M_PI;
+    EXPECT_LT(error, 2.0) << degrees << " deg tilt: " << estimate.reason;
+    EXPECT_NEAR(estimate.tilt_degrees, std::abs(degrees), 3.0) << estimate.reason;
+  }
+}
+
+TEST(RegistrationConfig, AutoPresetRegistersATiltedSourceScan) {
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/000000.bin");
+  // kitti00_lc_0_4438 of pairs.tsv with the source sensor tilted by 20 deg: T_gt' = T_gt * tilt^-1.
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(20.0 * M_PI / 180.0, Eigen::Vector3d(0.6, 0.8, 0.0)).toRotationMatrix();
+  const PointCloud source = rotated(read_point_cloud(testing::shared_data_path("kitti00/velodyne/000000.bin")), tilt);
+  const PointCloud target = read_point_cloud(testing::shared_data_path("kitti00/velodyne/004438.ply"));
+  Eigen::Isometry3d truth = read_pose_matrix(testing::shared_data_path("kitti00/gt/T_004438_from_000000.txt"));
+  truth = truth * Eigen::Isometry3d(tilt.transpose());
+  std::string notes;
+  const RegistrationOptions options = resolve_registration_options("auto", source, "auto", target, &notes);
+  std::printf("%s\n", notes.c_str());
+  EXPECT_LT(std::acos(std::clamp(options.source_extraction.up.dot(tilt * Eigen::Vector3d::UnitZ()), -1.0, 1.0)) * 180.0 / M_PI, 3.0);
+  const RegistrationResult result = register_clouds(source, target, options);
+  const double rte = translation_error(result.transform, truth);
+  const double rre = rotation_error_degrees(result.transform, truth);
+  std::printf("tilted source: status %s, RTE %.3f m, RRE %.3f deg\n", registration_status_name(result.status), rte, rre);
+  EXPECT_EQ(result.status, RegistrationStatus::Ok) << result.message;
+  EXPECT_TRUE(registration_succeeded(result.transform, truth)) << "RTE " << rte << " m, RRE " << rre << " deg";
+}
+
+TEST(RegistrationConfig, PrintedConfigurationRoundTripsThroughApply) {
+  const std::filesystem::path folder = temporary_folder("config_yaml");
+  for (const std::string& name : registration_preset_names()) {
+    RegistrationOptions options = registration_preset(name);
+    options.source_extraction.up = Eigen::Vector3d(0.1, -0.2, 0.97).normalized();  // values no preset has
+    options.source_extraction.minimum_range = 2.25;
+    options.graphs.thresholds = {0.15, 0.35};
+    options.modelling.fitter = "taubin";
+    options.estimation.minimum_inliers = 4;
+    options.ambiguity.score_ratio = 0.8125;
+    const std::string yaml = registration_config_yaml(options);
+    const std::string file = write_text(folder / (name + ".yaml"), "sensor: " + name + "\n" + yaml);
+    RegistrationOptions applied = registration_preset(name == "vlp16" ? "monument" : "vlp16");  // start elsewhere
+    apply_registration_config(file, applied);
+    EXPECT_EQ(registration_config_yaml(applied), yaml) << name;
+    EXPECT_TRUE(applied.source_extraction.up.isApprox(options.source_extraction.up, 1e-15)) << name;
+    EXPECT_EQ(applied.graphs.thresholds, options.graphs.thresholds) << name;
+  }
+  EXPECT_THROW(registration_config_yaml(RegistrationOptions{}, "both"), Error);
 }
 
 TEST(RegistrationReport, JsonFollowsTheContractAndPicturesAreWritten) {
