@@ -141,7 +141,7 @@ class CgalFitter final : public QuadricFitter {
                                                  make_pose(frame_with_axis(to_eigen(line.to_vector()), 2), to_eigen(line_centroid)));
       }
       result.status = FitStatus::Ok;
-      evaluate_fit(points, result);
+      evaluate_fit(points, result, {}, options_.evaluation);
       return result;
     }
 
@@ -207,7 +207,7 @@ class CgalFitter final : public QuadricFitter {
       if (best.type == QuadricType::Invalid) continue;
       result.quadric = best.quadric;
       result.status = FitStatus::Ok;
-      evaluate_fit(points, result);
+      evaluate_fit(points, result, {}, options_.evaluation);
       if (result.status == FitStatus::Ok && hint && result.type != requested &&
           !(requested == QuadricType::CircularCylinder && result.type == QuadricType::EllipticCylinder)) {
         // Only possible through rounding of the rebuilt Q; report it rather than hide it.

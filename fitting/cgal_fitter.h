@@ -37,6 +37,8 @@ struct CgalFitterOptions {
   int normal_neighbours = 18;
   /// Seed of CGAL's default random generator (reset at every fit, so fits are reproducible).
   unsigned seed = 5489u;
+  /// How the residual statistics are computed (default: every point).
+  FitEvaluationOptions evaluation;
 };
 
 /// Types the CGAL fitter can return: point, line, plane, sphere, circular cylinder, circular cone.

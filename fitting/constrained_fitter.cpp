@@ -266,7 +266,9 @@ bool is_cone(QuadricType type) { return type == QuadricType::CircularCone || typ
 /// Taubin's decomposition as an initial value of `type` in unit space, when it is of the same family.
 std::optional<CanonicalShape> taubin_guess(const Eigen::Matrix3Xd& points, QuadricType type, const Eigen::Vector3d& mean,
                                            double radius) {
-  const QuadricFit taubin = make_taubin_fitter()->fit(points, Eigen::Matrix3Xd(), type);
+  TaubinFitterOptions taubin_options;
+  taubin_options.evaluation.residuals = ResidualEvaluation::Skip;  // only the decomposition is used
+  const QuadricFit taubin = make_taubin_fitter(taubin_options)->fit(points, Eigen::Matrix3Xd(), type);
   if (taubin.status != FitStatus::Ok && taubin.status != FitStatus::TypeMismatch) return std::nullopt;
   if (family(taubin.shape.type) != family(type)) return std::nullopt;
   if (!taubin.shape.scale.allFinite() || !taubin.shape.center.allFinite()) return std::nullopt;
@@ -535,7 +537,7 @@ class ConstrainedFitter final : public QuadricFitter {
 
   QuadricFit fit(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& /*normals*/, FitTypeHint hint) const override {
     const auto start = std::chrono::steady_clock::now();
-    QuadricFit result = hint ? fit_type(points, *hint) : fit_automatic(points);
+    QuadricFit result = hint ? fit_type(points, *hint, options_.evaluation) : fit_automatic(points);
     result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return result;
   }
@@ -548,10 +550,14 @@ class ConstrainedFitter final : public QuadricFitter {
     best.message = "no automatic type could be fitted";
     double best_criterion = std::numeric_limits<double>::infinity();
     const double n = static_cast<double>(points.cols());
-    const StatisticalPose pose = statistical_pose(points, 1.0);
+    const StatisticalPose pose = point_statistics(points, 1.0);
+    // The choice needs residuals: when the caller skips them they are read on the default subsample.
+    FitEvaluationOptions automatic_evaluation = options_.evaluation;
+    if (automatic_evaluation.residuals == ResidualEvaluation::Skip)
+      automatic_evaluation = FitEvaluationOptions{ResidualEvaluation::Subsample, FitEvaluationOptions{}.max_points};
     const double size = std::max(pose.scale.norm(), 1e-12);
     for (const QuadricType type : options_.automatic_types) {
-      QuadricFit candidate = fit_type(points, type);
+      QuadricFit candidate = fit_type(points, type, automatic_evaluation);
       if (candidate.status != FitStatus::Ok && candidate.status != FitStatus::NotConverged) {
         if (best.status != FitStatus::Ok && best.status != FitStatus::NotConverged) best = candidate;
         continue;
@@ -567,7 +573,7 @@ class ConstrainedFitter final : public QuadricFitter {
     return best;
   }
 
-  QuadricFit fit_type(const Eigen::Matrix3Xd& points, QuadricType type) const {
+  QuadricFit fit_type(const Eigen::Matrix3Xd& points, QuadricType type, const FitEvaluationOptions& evaluation) const {
     QuadricFit result;
     result.type = type;
     if (!is_supported(type)) {
@@ -585,12 +591,14 @@ class ConstrainedFitter final : public QuadricFitter {
     // Point, line and plane: the orthogonal-distance minimiser is closed-form (centroid; total least
     // squares line and plane through the centroid), which is exactly the statistical fitter's answer.
     if (type == QuadricType::Point || type == QuadricType::Line || type == QuadricType::Plane) {
-      QuadricFit linear = make_statistical_fitter()->fit(points, Eigen::Matrix3Xd(), type);
+      StatisticalFitterOptions linear_options;
+      linear_options.evaluation = evaluation;
+      QuadricFit linear = make_statistical_fitter(linear_options)->fit(points, Eigen::Matrix3Xd(), type);
       if (linear.status == FitStatus::Ok && type == QuadricType::Point) {
         Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
         pose.translation() = linear.statistics.center;
         linear.quadric = Quadric::from_canonical(QuadricType::Point, Eigen::Vector3d::Ones(), pose);
-        evaluate_fit(points, linear);
+        evaluate_fit(points, linear, {}, evaluation);
       }
       return linear;
     }
@@ -598,7 +606,7 @@ class ConstrainedFitter final : public QuadricFitter {
     // Unit space.
     const Eigen::Vector3d mean = points.rowwise().mean();
     const double radius = std::sqrt((points.colwise() - mean).colwise().squaredNorm().mean());
-    result.statistics = statistical_pose(points);
+    result.statistics = point_statistics(points);
     if (!(radius > 0.0)) {
       result.status = FitStatus::Degenerate;
       result.message = "all points coincide";
@@ -622,25 +630,48 @@ class ConstrainedFitter final : public QuadricFitter {
       return result;
     }
 
+    // Every initial value is solved on an evenly strided subsample (all points when there are few);
+    // the best one is then polished on every point.
+    const ResidualSample coarse = residual_sample(
+        points.cols(), FitEvaluationOptions{ResidualEvaluation::Subsample, std::max(options_.subsample_points, 1)});
+    const bool subsampled = coarse.count < points.cols();
+    const Eigen::Matrix3Xd coarse_points =
+        subsampled ? Eigen::Matrix3Xd(Eigen::Map<const Eigen::Matrix3Xd, 0, Eigen::OuterStride<>>(
+                                          points.data(), 3, coarse.count, Eigen::OuterStride<>(3 * coarse.stride)))
+                   : Eigen::Matrix3Xd();
+    const Eigen::Matrix3Xd coarse_unit = subsampled ? Eigen::Matrix3Xd((coarse_points.colwise() - mean) / radius) : Eigen::Matrix3Xd();
+    const Eigen::Matrix3Xd& start_unit = subsampled ? coarse_unit : unit;
     std::optional<CanonicalShape> taubin;
-    if (options_.use_taubin_initialisation) taubin = taubin_guess(points, type, mean, radius);
-    const std::vector<CanonicalShape> guesses = initial_values(type, unit, principal, sigma, taubin);
+    if (options_.use_taubin_initialisation) taubin = taubin_guess(subsampled ? coarse_points : points, type, mean, radius);
+    const std::vector<CanonicalShape> guesses = initial_values(type, start_unit, principal, sigma, taubin);
     if (guesses.empty()) {
       result.status = FitStatus::Degenerate;
       result.message = "no initial value for a " + quadric_type_name(type) + " (the points do not resemble one)";
       return result;
     }
+    const auto usable = [](const Solution& solution) {
+      return solution.termination != ceres::FAILURE && solution.termination != ceres::USER_FAILURE &&
+             std::isfinite(solution.cost) && solution.shape.scale.allFinite() && solution.shape.center.allFinite();
+    };
+    // Screening: every initial value gets a few iterations on the subsample; only the best one is
+    // then solved to the full tolerances (on every point when polishing).
+    const bool screen = guesses.size() > 1 && options_.screening_iterations > 0;
+    ConstrainedFitterOptions screening = options_;
+    screening.max_iterations = std::min(options_.screening_iterations, options_.max_iterations);
     std::optional<Solution> best;
     for (const CanonicalShape& guess : guesses) {
-      Solution solution = solve(type, unit, guess, options_, radius);
-      if (solution.termination == ceres::FAILURE || solution.termination == ceres::USER_FAILURE) continue;
-      if (!std::isfinite(solution.cost) || !solution.shape.scale.allFinite() || !solution.shape.center.allFinite()) continue;
-      if (!best || solution.cost < best->cost) best = solution;
+      Solution solution = solve(type, start_unit, guess, screen ? screening : options_, radius);
+      if (usable(solution) && (!best || solution.cost < best->cost)) best = solution;
     }
     if (!best) {
       result.status = FitStatus::Failed;
       result.message = "every Ceres solve failed for the " + quadric_type_name(type);
       return result;
+    }
+    const bool polish = subsampled && options_.polish_on_all_points;
+    if (screen || polish) {
+      Solution final_solution = solve(type, polish ? unit : start_unit, best->shape, options_, radius);
+      if (usable(final_solution)) best = final_solution;
     }
     const CanonicalShape& shape = best->shape;
     const int defined = (type == QuadricType::Sphere || type == QuadricType::Ellipsoid) ? 3 : 2;
@@ -666,7 +697,7 @@ class ConstrainedFitter final : public QuadricFitter {
     result.quadric = Quadric::from_canonical(type, scale, pose);
     result.status = best->termination == ceres::CONVERGENCE ? FitStatus::Ok : FitStatus::NotConverged;
     if (result.status == FitStatus::NotConverged) result.message = "Ceres stopped early: " + best->message;
-    evaluate_fit(points, result);
+    evaluate_fit(points, result, {}, evaluation);
     return result;
   }
 

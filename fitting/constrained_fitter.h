@@ -13,7 +13,8 @@
 //                surface parameter pair per point (the foot point), rotation on a quaternion manifold.
 // Initial values: the statistical pose (each principal direction tried as the axis, circle/sphere
 // fitted algebraically in it) and, where the Taubin fit returns the same family, Taubin's
-// decomposition; the solution with the lowest cost is kept.
+// decomposition; each is solved on a deterministic subsample of at most subsample_points points, and
+// the solution with the lowest cost is polished on every point.
 #pragma once
 
 #include "fitting/quadric_fitter.h"
@@ -31,6 +32,14 @@ struct ConstrainedFitterOptions {
   double parameter_tolerance = 1e-13;    ///< Ceres: stop when |d x| <= tol * (|x| + tol)
   double robust_loss_scale = 0.0;        ///< Cauchy loss scale in metres on each distance; 0 = plain least squares
   bool use_taubin_initialisation = true; ///< also start from Taubin's fit when it returns the requested family
+  FitEvaluationOptions evaluation;       ///< how the residual statistics are computed (default: every point)
+  /// Every initial value is solved on an evenly strided subsample of at most this many points; the
+  /// best solution is then the start of one solve on every point (see polish_on_all_points).
+  int subsample_points = 1500;
+  bool polish_on_all_points = true;      ///< refine the subsample's best solution on every point (false: keep it)
+  /// With several initial values, each first gets at most this many iterations on the subsample and
+  /// only the lowest-cost one is solved to the tolerances above (0: solve every one fully).
+  int screening_iterations = 15;
   /// Largest radius / scale (relative to the RMS radius of the points) accepted before the fit is
   /// reported Degenerate (nearly flat points make a cylinder or sphere radius diverge).
   double largest_relative_scale = 1e3;

@@ -157,7 +157,7 @@ class LearnedFitter final : public QuadricFitter {
                        std::to_string(minimum_points_for_type(type)) + " points, got " + std::to_string(points.cols());
       return finish(result);
     }
-    result.statistics = statistical_pose(points, kStatisticalScaleFactor);
+    result.statistics = point_statistics(points, kStatisticalScaleFactor);
     const Eigen::Matrix3Xd sampled = learned_fitter_sample(points, model_.num_points);
     const SegmentNormalisation frame = normalise_segment(sampled);
     if (!((sampled.colwise() - frame.center).colwise().squaredNorm().maxCoeff() > 0.0)) {
@@ -177,7 +177,7 @@ class LearnedFitter final : public QuadricFitter {
     }
     result.quadric = Quadric::from_canonical(type, primitive.scale, primitive.pose);  // Eq. (Q=PCP)
     result.status = FitStatus::Ok;
-    evaluate_fit(points, result);
+    evaluate_fit(points, result, {}, options_.evaluation);
     return finish(result);
   }
 
@@ -198,6 +198,12 @@ class AutoFitter final : public QuadricFitter {
   QuadricFit fit(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, FitTypeHint hint) const override {
     const auto start = std::chrono::steady_clock::now();
     QuadricFit learned = learned_->fit(points, normals, hint);
+    // The policy needs f_p2s even when the caller skips residuals: then it is read on the default subsample.
+    if (learned.status == FitStatus::Ok && learned.residual_evaluation == ResidualEvaluation::Skip) {
+      const FitEvaluationOptions subsample{ResidualEvaluation::Subsample, FitEvaluationOptions{}.max_points};
+      learned.algebraic_distance =
+          unit_space_algebraic_distance(points, learned.quadric, residual_sample(points.cols(), subsample));
+    }
     const std::string threshold = "delta_p = " + number(options_.delta_p);
     QuadricFit chosen;
     if (learned.status == FitStatus::Ok && learned.algebraic_distance <= options_.delta_p) {

@@ -82,6 +82,7 @@ LearnedPrimitive decode_learned_outputs(QuadricType type, const Eigen::VectorXf&
 struct LearnedFitterOptions {
   std::string model_directory;                          ///< weight folder; empty: default_learned_fitter_directory()
   QuadricType automatic_type = QuadricType::Ellipsoid;  ///< type without a hint (paper: geometry-only clusters -> ellipsoid)
+  FitEvaluationOptions evaluation;                      ///< how the residual statistics are computed (default: every point)
 };
 
 /// The learned fitter. Loads every network at construction (throws quadrix::Error for a missing or

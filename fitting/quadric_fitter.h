@@ -38,6 +38,38 @@ FitTypeHint fit_type_hint_from_name(const std::string& name);
 /// Minimum number of points a type needs to be fitted (point 1, line 2, plane 3, sphere 4, others 9).
 std::size_t minimum_points_for_type(QuadricType type);
 
+/// How evaluate_fit computes a fit's residual statistics (residual_rms, residual_max, algebraic_distance).
+/// Exact orthogonal distances cost far more than most fits (an ellipsoid's distance is iterative), so
+/// callers that do not read the statistics choose a cheaper mode.
+enum class ResidualEvaluation {
+  Exact,      ///< every point (the default; what `quadrix fit` prints)
+  Subsample,  ///< an evenly strided deterministic subsample of at most FitEvaluationOptions::max_points points
+  Skip,       ///< none: the three statistics are NaN (for callers that only use the quadric, e.g. scene modelling)
+};
+
+/// Lower-case name of a residual evaluation ("exact", "subsample", "skip"), stable for JSON and CSV.
+std::string residual_evaluation_name(ResidualEvaluation evaluation);
+
+/// Parses a residual evaluation name (exact, subsample, skip); throws quadrix::Error naming `field` otherwise.
+ResidualEvaluation residual_evaluation_from_name(const std::string& name, const std::string& field = "--residuals");
+
+/// How a fitter evaluates its result (every fitter's options carry one; make_quadric_fitter takes one).
+struct FitEvaluationOptions {
+  ResidualEvaluation residuals = ResidualEvaluation::Exact;  ///< which points the residual statistics use
+  int max_points = 2000;  ///< Subsample: at most this many points, every ceil(N / max_points)-th one (>= 1)
+};
+
+/// The columns a residual evaluation visits: every `stride`-th point from column 0, `count` of them
+/// (count 0 for Skip or no points).
+struct ResidualSample {
+  Eigen::Index stride = 1;  ///< step between visited columns
+  Eigen::Index count = 0;   ///< visited columns
+};
+
+/// The deterministic residual sample of `point_count` points under `evaluation`; throws quadrix::Error
+/// when Subsample has max_points < 1.
+ResidualSample residual_sample(Eigen::Index point_count, const FitEvaluationOptions& evaluation);
+
 /// Everything a fitter returns.
 struct QuadricFit {
   FitStatus status = FitStatus::Failed;             ///< outcome
@@ -48,7 +80,10 @@ struct QuadricFit {
   double residual_rms = 0.0;                        ///< RMS orthogonal point-to-surface distance, metres
   double residual_max = 0.0;                        ///< largest orthogonal distance, metres
   double algebraic_distance = 0.0;                  ///< f_p2s of paper Eq. (f_p2s) in unit space (see unit_space_algebraic_distance)
-  double time_ms = 0.0;                             ///< wall time of the fit
+  double time_ms = 0.0;                             ///< wall time of the fit, residual evaluation included
+  ResidualEvaluation residual_evaluation = ResidualEvaluation::Exact;  ///< how the residual statistics were computed
+  Eigen::Index residual_points = 0;                 ///< points the residual statistics were computed on (0: skipped)
+  double evaluation_ms = 0.0;                       ///< part of time_ms spent in evaluate_fit (type reading and residuals)
   std::string message;                              ///< human-readable detail for non-ok statuses
 };
 
@@ -64,6 +99,9 @@ class QuadricFitter {
 
 /// Creates a fitter by registry name; throws quadrix::Error listing the valid names otherwise.
 std::unique_ptr<QuadricFitter> make_quadric_fitter(const std::string& name);
+/// Creates a fitter by registry name with its default options except the residual evaluation
+/// (e.g. FitEvaluationOptions{ResidualEvaluation::Skip} for scene modelling).
+std::unique_ptr<QuadricFitter> make_quadric_fitter(const std::string& name, const FitEvaluationOptions& evaluation);
 /// Names of every registered fitter.
 std::vector<std::string> quadric_fitter_names();
 
@@ -71,10 +109,21 @@ std::vector<std::string> quadric_fitter_names();
 /// scaled so the RMS radius is 1), then the mean first-order distance |f(x)| / ||grad f(x)||
 /// (the paper's |x^T Q x| / |grad(Q) x| read with a norm in the denominator, after Taubin 1991).
 double unit_space_algebraic_distance(const Eigen::Matrix3Xd& points, const Quadric& quadric);
+/// The same f_p2s over the columns of `sample` only (their mean and RMS radius define the unit space).
+double unit_space_algebraic_distance(const Eigen::Matrix3Xd& points, const Quadric& quadric, const ResidualSample& sample);
+
+/// t_s, R_s and s_s of the points exactly as statistical_pose (geometry/quadric_record.h) defines them
+/// (mean, descending covariance eigenvectors with its sign rule, k_s sigma), computed in two passes
+/// without copying the points; also returns the covariance (1/n sum of centred outer products).
+StatisticalPose point_statistics(const Eigen::Matrix3Xd& points, double scale_factor = kStatisticalScaleFactor,
+                                 Eigen::Matrix3d* covariance = nullptr);
 
 /// Fills shape (exact decomposition of Q), type (Q classified with `type_tolerances`),
 /// residual_rms / residual_max (orthogonal distances to the exact shape) and algebraic_distance of
-/// `fit`, so every fitter reports the same numbers (statistics are the fitter's to fill).
-void evaluate_fit(const Eigen::Matrix3Xd& points, QuadricFit& fit, const DecompositionTolerances& type_tolerances = {});
+/// `fit` over the points `evaluation` selects (NaN when it skips them), and residual_evaluation,
+/// residual_points and evaluation_ms, so every fitter reports the same numbers (statistics are the
+/// fitter's to fill).
+void evaluate_fit(const Eigen::Matrix3Xd& points, QuadricFit& fit, const DecompositionTolerances& type_tolerances = {},
+                  const FitEvaluationOptions& evaluation = {});
 
 }  // namespace quadrix

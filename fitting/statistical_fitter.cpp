@@ -35,7 +35,7 @@ class StatisticalFitter final : public QuadricFitter {
       return finish(result);
     }
     // Steps 1-2: t_s, R_s (descending variance, det +1) and s_s = k_s sigma_s.
-    const StatisticalPose statistics = statistical_pose(points, options_.scale_factor);
+    const StatisticalPose statistics = point_statistics(points, options_.scale_factor);
     result.statistics = statistics;
     const double largest_scale = statistics.scale.maxCoeff();
     if (!(largest_scale > 0.0)) {
@@ -90,7 +90,7 @@ class StatisticalFitter final : public QuadricFitter {
     pose.translation() = statistics.center;
     result.quadric = Quadric::from_canonical(type, canonical_scale, pose);
     result.status = FitStatus::Ok;
-    evaluate_fit(points, result);
+    evaluate_fit(points, result, {}, options_.evaluation);
     return finish(result);
   }
 

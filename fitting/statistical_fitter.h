@@ -13,6 +13,7 @@ struct StatisticalFitterOptions {
   double scale_factor = kStatisticalScaleFactor;  ///< k_s: 1.645 covers 90% of a Gaussian (paper)
   double minimum_relative_scale = 1e-6;           ///< scales below this * largest scale are clamped to it (flat/thin elements)
   QuadricType automatic_type = QuadricType::Ellipsoid;  ///< type used without a hint (paper: geometry-only clusters -> ellipsoid)
+  FitEvaluationOptions evaluation;                      ///< how the residual statistics are computed (default: every point)
 };
 
 /// The statistical fitter with explicit options (make_quadric_fitter("statistical") uses the defaults).
