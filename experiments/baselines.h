@@ -11,6 +11,11 @@
 // 0.9 and distance checkers, 1.5x voxel inlier distance, 100k iterations at 0.999 confidence; FGR
 // with Open3D's defaults; PCL's prerejective example: 3 samples, 5 nearest features, polygon
 // similarity 0.9, inlier fraction 0.25).
+//
+// Threads: `threads` (default 1) bounds Open3D's and PCL's OpenMP loops; without it Open3D 0.16
+// runs on every physical core. PCL's prerejective RANSAC is single-threaded. For comparison,
+// Quadrix's register_clouds runs extraction, modelling and the compatibility graphs on TBB's default
+// arena (every core) and the clique search (clique_threads = 1) and refinement on one thread.
 #pragma once
 
 #include "geometry/point_cloud.h"
@@ -43,7 +48,7 @@ struct BaselineOptions {
   int prerejective_samples = 3;              ///< PCL points sampled per hypothesis
   int prerejective_feature_neighbours = 5;   ///< PCL: a sample's match is drawn among this many nearest features
   double prerejective_inlier_fraction = 0.25;///< PCL: hypothesis accepted when this fraction of source points are inliers
-  int threads = 1;                           ///< OpenMP threads of Open3D and PCL feature/RANSAC loops (>= 1); 1 is deterministic
+  int threads = 1;                           ///< OpenMP threads of Open3D (normals, FPFH, RANSAC) and PCL (normals, FPFH) loops, >= 1
   unsigned seed = 42;                        ///< seed of the sampling baselines (process-global RNGs: not reproducible across concurrent calls)
 };
 

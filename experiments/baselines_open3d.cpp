@@ -16,9 +16,11 @@
 
 #include <omp.h>
 
+#include <cstdlib>
 #include <exception>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -34,6 +36,19 @@ struct PreparedCloud {
   std::shared_ptr<o3d_geometry::PointCloud> points;     ///< voxel centroids with normals
   std::shared_ptr<o3d_registration::Feature> features;  ///< 33 x N FPFH
 };
+
+/// Makes Open3D honour omp_set_num_threads. Open3D 0.16 sizes its parallel loops with
+/// utility::EstimateMaxThreads(), which returns omp_get_max_threads() only when OMP_NUM_THREADS or
+/// OMP_DYNAMIC is set in the environment and otherwise all physical cores (so `threads = 1` would
+/// silently run on every core). When neither is set, this sets OMP_DYNAMIC=false, which is libgomp's
+/// default, so nothing changes for OpenMP itself; once per process, before the first Open3D call.
+void let_open3d_follow_openmp_thread_count() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (std::getenv("OMP_NUM_THREADS") == nullptr && std::getenv("OMP_DYNAMIC") == nullptr)
+      setenv("OMP_DYNAMIC", "false", /*overwrite=*/0);
+  });
+}
 
 /// Converts a Quadrix cloud to an Open3D cloud (positions only).
 o3d_geometry::PointCloud to_open3d(const PointCloud& cloud) {
@@ -76,6 +91,7 @@ BaselineResult run_with_open3d(
     const std::string& name, const PointCloud& source, const PointCloud& target, const BaselineOptions& options,
     const std::function<o3d_registration::RegistrationResult(const PreparedCloud&, const PreparedCloud&)>& estimate) {
   open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
+  let_open3d_follow_openmp_thread_count();
   omp_set_num_threads(options.threads);
   open3d::utility::random::Seed(static_cast<int>(options.seed));
 
