@@ -32,6 +32,8 @@
 #include <set>
 #include <sstream>
 
+#include <time.h>
+
 namespace quadrix {
 namespace {
 
@@ -334,6 +336,13 @@ std::vector<Problem> real_problems(const PairRow& pair, std::size_t pair_index, 
   return problems;
 }
 
+/// CPU time consumed by the calling thread, milliseconds.
+double thread_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return 1e3 * static_cast<double>(now.tv_sec) + 1e-6 * static_cast<double>(now.tv_nsec);
+}
+
 /// Pose gap (metres, degrees) between two poses.
 std::pair<double, double> pose_gap(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& reference) {
   return {translation_error(estimate, reference), rotation_error_degrees(estimate, reference)};
@@ -436,7 +445,9 @@ RefinerStudyResult run_refiner_study(const RefinerStudyOptions& options, const R
         const RefinementResult reference = refiner->refine(problem.factors, problem.truth, refiner_options);
         const auto [reference_rte, reference_rre] = pose_gap(reference.transform, problem.truth);
         for (std::size_t s = 0; s < problem.starts.size(); ++s) {
+          const double cpu_before = thread_cpu_ms();
           const RefinementResult refined = refiner->refine(problem.factors, problem.starts[s], refiner_options);
+          const double cpu_after = thread_cpu_ms();
           RefinerStudyRow row;
           row.source = problem.source;
           row.correspondence_set = problem.correspondence_set;
@@ -465,6 +476,7 @@ RefinerStudyResult run_refiner_study(const RefinerStudyOptions& options, const R
           row.initial_cost = refined.initial_cost;
           row.final_cost = refined.final_cost;
           row.time_ms = 1000.0 * refined.seconds;
+          row.cpu_ms = cpu_after - cpu_before;
           result.rows[offsets[task / configurations] + c * problem.starts.size() + s] = std::move(row);
         }
         const std::size_t now = done.fetch_add(problem.starts.size()) + problem.starts.size();
@@ -529,13 +541,25 @@ std::vector<double> synthetic_levels(const RefinerStudyResult& result, double Re
 
 std::string percent_label(double fraction) { return fixed(100.0 * fraction, 0) + "%"; }
 
+/// The distinct backend/algorithm pairs of the study, in configuration order (loss of the first one).
+std::vector<RefinerConfiguration> distinct_methods(const RefinerStudyResult& result) {
+  std::vector<RefinerConfiguration> methods;
+  for (const RefinerConfiguration& configuration : result.configurations)
+    if (std::none_of(methods.begin(), methods.end(), [&](const RefinerConfiguration& m) {
+          return m.backend == configuration.backend && m.algorithm == configuration.algorithm;
+        }))
+      methods.push_back(configuration);
+  return methods;
+}
+
 }  // namespace
 
 void write_refiner_study_csv(const std::string& path, const RefinerStudyResult& result) {
   write_file_atomically(path, [&](std::ostream& out) {
     out << "source,correspondence_set,backend,algorithm,loss,noise_m,outlier_fraction,trial,start_translation_m,"
            "start_rotation_deg,correspondences,wrong_correspondences,factors,status,rte_m,rre_deg,criterion,reference_rte_m,"
-           "reference_rre_deg,gap_translation_m,gap_rotation_deg,converged,iterations,evaluations,initial_cost,final_cost,time_ms\n";
+           "reference_rre_deg,gap_translation_m,gap_rotation_deg,converged,iterations,evaluations,initial_cost,final_cost,time_ms,"
+           "cpu_ms\n";
     for (const RefinerStudyRow& row : result.rows)
       out << row.source << ',' << row.correspondence_set << ',' << row.backend << ',' << row.algorithm << ',' << row.loss << ','
           << number(row.noise) << ',' << number(row.outlier_fraction) << ',' << row.trial << ',' << number(row.start_translation)
@@ -544,7 +568,7 @@ void write_refiner_study_csv(const std::string& path, const RefinerStudyResult& 
           << ',' << number(row.reference_rte) << ',' << number(row.reference_rre_degrees) << ',' << number(row.gap_translation)
           << ',' << number(row.gap_rotation_degrees) << ',' << (row.converged ? 1 : 0) << ',' << row.iterations << ','
           << row.evaluations << ',' << number(row.initial_cost) << ',' << number(row.final_cost) << ',' << number(row.time_ms, 4)
-          << '\n';
+          << ',' << number(row.cpu_ms, 4) << '\n';
   });
 }
 
@@ -600,6 +624,32 @@ void write_refiner_study_markdown(const std::string& path, const RefinerStudyRes
            "find. Whether that minimum is accurate is a property of the loss, shown by the reference's own RTE/RRE. A degenerate "
            "or failed refinement never counts as converged.\n\n";
 
+    // Headline: each backend/algorithm pooled over losses, noise levels and scenes.
+    const std::vector<RefinerConfiguration> methods = distinct_methods(result);
+    const auto method_rows = [&](const RefinerConfiguration& method, const RowFilter& keep) {
+      return rows_where(result, [&](const RefinerStudyRow& r) {
+        return r.backend == method.backend && (method.algorithm.empty() || r.algorithm == method.algorithm) && keep(r);
+      });
+    };
+    out << "## Headline\n\nConverged share per backend/algorithm, pooled over every loss, noise level and scene (synthetic) or "
+           "pair and correspondence set (real); median CPU and wall time per synthetic refinement.\n\n| backend/algorithm |";
+    for (const double level : outlier_levels) out << " synthetic, " << percent_label(level) << " wrong |";
+    out << " real KITTI | median CPU time | median wall time |\n|---|";
+    for (std::size_t i = 0; i < outlier_levels.size() + 3; ++i) out << "---:|";
+    out << '\n';
+    for (const RefinerConfiguration& method : methods) {
+      out << "| " << refiner_configuration_name(method) << " |";
+      for (const double level : outlier_levels)
+        out << ' ' << fixed(convergence_percent(method_rows(method, [&](const RefinerStudyRow& r) {
+              return r.correspondence_set == "synthetic" && r.outlier_fraction == level;
+            })), 0) << "% |";
+      const auto synthetic_rows = method_rows(method, [](const RefinerStudyRow& r) { return r.correspondence_set == "synthetic"; });
+      out << ' ' << fixed(convergence_percent(method_rows(method, [](const RefinerStudyRow& r) { return r.correspondence_set != "synthetic"; })), 0)
+          << "% | " << fixed(median(column(synthetic_rows, &RefinerStudyRow::cpu_ms)), 2) << " ms | "
+          << fixed(median(column(synthetic_rows, &RefinerStudyRow::time_ms)), 2) << " ms |\n";
+    }
+    out << '\n';
+
     for (const double noise : noise_levels) {
       out << "## Synthetic, centre noise " << fixed(100.0 * noise, 0) << " cm: convergence by wrong-correspondence share\n\n"
           << "Cells: converged share / median RTE / median RRE (RTE and RRE against the ground truth), both scenes.\n\n| configuration | loss |";
@@ -639,9 +689,10 @@ void write_refiner_study_markdown(const std::string& path, const RefinerStudyRes
     }
 
     out << "\n## Cost per refinement (every synthetic problem)\n\nIterations: Ceres minimiser iterations; NLopt evaluations that "
-           "improved the best cost. Evaluations: objective evaluations. Times are wall-clock per refinement on 2 shared, loaded cores.\n\n"
-        << "| configuration | loss | median iterations | median evaluations | median time | 90th pct time | median factors |\n"
-        << "|---|---|---:|---:|---:|---:|---:|\n";
+           "improved the best cost. Evaluations: objective evaluations. CPU time is the refining thread's; wall time is "
+           "RefinementResult::seconds, inflated by the other work on 2 shared, loaded cores.\n\n"
+        << "| configuration | loss | median iterations | median evaluations | median CPU time | 90th pct CPU time | median wall time | median factors |\n"
+        << "|---|---|---:|---:|---:|---:|---:|---:|\n";
     for (const RefinerConfiguration& configuration : result.configurations) {
       const auto rows = synthetic(configuration, [](const RefinerStudyRow&) { return true; });
       std::vector<double> factors;
@@ -649,8 +700,9 @@ void write_refiner_study_markdown(const std::string& path, const RefinerStudyRes
       out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " | "
           << fixed(median(int_column(rows, &RefinerStudyRow::iterations)), 0) << " | "
           << fixed(median(int_column(rows, &RefinerStudyRow::evaluations)), 0) << " | "
-          << fixed(median(column(rows, &RefinerStudyRow::time_ms)), 2) << " ms | "
-          << fixed(percentile(column(rows, &RefinerStudyRow::time_ms), 0.9), 2) << " ms | " << fixed(median(factors), 0) << " |\n";
+          << fixed(median(column(rows, &RefinerStudyRow::cpu_ms)), 2) << " ms | "
+          << fixed(percentile(column(rows, &RefinerStudyRow::cpu_ms), 0.9), 2) << " ms | "
+          << fixed(median(column(rows, &RefinerStudyRow::time_ms)), 2) << " ms | " << fixed(median(factors), 0) << " |\n";
     }
 
     const auto real = rows_where(result, [](const RefinerStudyRow& r) { return r.correspondence_set != "synthetic"; });
@@ -658,8 +710,8 @@ void write_refiner_study_markdown(const std::string& path, const RefinerStudyRes
     for (const std::string& note : result.notes) out << "- " << note << '\n';
     if (!real.empty()) {
       out << "\nCells: converged share (criterion `reference`) / median RTE / median RRE of the refinements from perturbed starts / "
-             "RTE and RRE of the reference; time = median per refinement.\n\n"
-          << "| configuration | loss | gt_inliers | clique | time |\n|---|---|---:|---:|---:|\n";
+             "RTE and RRE of the reference; CPU time = median per refinement.\n\n"
+          << "| configuration | loss | gt_inliers | clique | CPU time |\n|---|---|---:|---:|---:|\n";
       for (const RefinerConfiguration& configuration : result.configurations) {
         out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " |";
         for (const char* set : {"gt_inliers", "clique"}) {
@@ -674,7 +726,7 @@ void write_refiner_study_markdown(const std::string& path, const RefinerStudyRes
         const auto rows = rows_where(result, [&](const RefinerStudyRow& r) {
           return r.correspondence_set != "synthetic" && same_configuration(r, configuration);
         });
-        out << ' ' << fixed(median(column(rows, &RefinerStudyRow::time_ms)), 2) << " ms |\n";
+        out << ' ' << fixed(median(column(rows, &RefinerStudyRow::cpu_ms)), 2) << " ms |\n";
       }
     }
   });
@@ -685,15 +737,10 @@ void write_refiner_study_svg(const std::string& path, const RefinerStudyResult& 
   std::vector<std::string> ticks;
   for (const double level : outlier_levels) ticks.push_back(percent_label(level));
   // Backend/algorithm pairs in configuration order; one panel per loss, then the time panel.
-  std::vector<RefinerConfiguration> methods;
+  const std::vector<RefinerConfiguration> methods = distinct_methods(result);
   std::vector<RobustLoss> losses;
-  for (const RefinerConfiguration& configuration : result.configurations) {
-    if (std::none_of(methods.begin(), methods.end(), [&](const RefinerConfiguration& m) {
-          return m.backend == configuration.backend && m.algorithm == configuration.algorithm;
-        }))
-      methods.push_back(configuration);
+  for (const RefinerConfiguration& configuration : result.configurations)
     if (std::find(losses.begin(), losses.end(), configuration.loss) == losses.end()) losses.push_back(configuration.loss);
-  }
   const auto series_of = [&](RobustLoss loss, const std::function<double(const std::vector<const RefinerStudyRow*>&)>& statistic) {
     std::vector<report::PlotSeries> series;
     for (RefinerConfiguration method : methods) {
@@ -718,7 +765,7 @@ void write_refiner_study_svg(const std::string& path, const RefinerStudyResult& 
     panels.push_back(std::move(panel));
   }
   report::PlotPanel time_panel;
-  time_panel.title = std::string("median time per refinement, loss ") + robust_loss_name(losses.front());
+  time_panel.title = std::string("median CPU time per refinement, loss ") + robust_loss_name(losses.front());
   time_panel.x_label = "wrong correspondences";
   time_panel.y_label = " ms";
   time_panel.x_ticks = ticks;
@@ -726,7 +773,7 @@ void write_refiner_study_svg(const std::string& path, const RefinerStudyResult& 
   time_panel.y_low = 0.1;
   time_panel.y_high = 1000.0;
   time_panel.series = series_of(losses.front(), [](const std::vector<const RefinerStudyRow*>& rows) {
-    return median(column(rows, &RefinerStudyRow::time_ms));
+    return median(column(rows, &RefinerStudyRow::cpu_ms));
   });
   panels.push_back(std::move(time_panel));
   report::write_line_panels_svg(path, panels, 2);

@@ -104,7 +104,8 @@ struct RefinerStudyRow {
   int evaluations = 0;               ///< RefinementResult::evaluations
   double initial_cost = 0.0;         ///< F at the start
   double final_cost = 0.0;           ///< F at the end
-  double time_ms = 0.0;              ///< RefinementResult::seconds in milliseconds
+  double time_ms = 0.0;              ///< RefinementResult::seconds in milliseconds (wall clock)
+  double cpu_ms = 0.0;               ///< CPU time of the refining thread, milliseconds (robust to a loaded machine)
 };
 
 /// All refinements of a study.

@@ -41,7 +41,7 @@ TEST(RefinerStudy, EveryBackendAndAlgorithmConvergesFromFiveMetresAndTwentyDegre
   options.losses = {RobustLoss::None};
   options.outlier_fractions = {0.0};
   options.noise_levels = {AttributeNoise{}};
-  options.trials = 4;
+  options.trials = 10;
   options.minimum_translation = options.maximum_translation = 5.0;
   options.minimum_rotation_degrees = options.maximum_rotation_degrees = 20.0;
   const RefinerStudyResult result = run_refiner_study(options);
@@ -107,6 +107,7 @@ TEST(RefinerStudy, TinyStudyRowsAreConsistent) {
     EXPECT_LE(row.final_cost, row.initial_cost);
     EXPECT_GT(row.evaluations, 0);
     EXPECT_GE(row.time_ms, 0.0);
+    EXPECT_GE(row.cpu_ms, 0.0);
   }
   ASSERT_EQ(per_cell.size(), 16u);
   for (const auto& cell : per_cell) EXPECT_EQ(cell.second, options.trials);
