@@ -1,7 +1,8 @@
-// `quadrix model INPUT --out model.json [--binary model.qsm] [--mesh model.ply] [--elements
-// elements.ply] [--preset P] [--labels FILE] [--fitter NAME]`: the paper's quadric-based scene
-// representation of one cloud (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling").
+// `quadrix model INPUT... [--poses P,...] --out model.json [--binary model.qsm] [--mesh model.ply]
+// [--elements elements.ply] [--picture model.png] [--preset P] [--labels FILE] [--fitter NAME]`:
+// the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose) (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling").
 #include "experiments/command_registry.h"
+#include "experiments/model_picture.h"
 #include "fitting/scene_modelling.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
@@ -19,7 +20,8 @@ namespace quadrix::cli {
 namespace {
 
 struct ModelCommandOptions {
-  std::string input;                  ///< point-cloud file
+  std::vector<std::string> inputs;    ///< point-cloud files (several: stations of one static scan, merged with `poses`)
+  std::vector<std::string> poses;     ///< sensor -> world pose file of each input (4x4 row-major), for merging
   std::string format = "auto";        ///< input format override
   std::string preset = "vlp64";       ///< extraction preset
   std::string labels;                 ///< SemanticKITTI .label file (switches to the labels semantic mode)
@@ -29,6 +31,10 @@ struct ModelCommandOptions {
   std::string binary;                 ///< model binary (.qsm)
   std::string mesh;                   ///< PLY mesh of the fitted quadrics
   std::string elements;               ///< PLY of the element points coloured per element
+  std::string picture;                ///< PNG picture of the mesh
+  double view_azimuth_deg = -60.0;    ///< picture camera azimuth, degrees
+  double view_elevation_deg = 30.0;   ///< picture camera elevation, degrees
+  double view_zoom = 1.0;             ///< picture zoom (> 1: closer)
 };
 
 // A distinct colour per element (golden-ratio hue walk, full saturation).
@@ -105,6 +111,42 @@ std::string human_bytes(double bytes) {
   return buffer;
 }
 
+// One input as read, or several moved into the world frame by their poses and concatenated
+// (labels and extra fields are kept only when every input has them).
+PointCloud read_merged_clouds(const ModelCommandOptions& options, const CloudReadOptions& read_options) {
+  if (options.inputs.size() == 1 && options.poses.empty()) return read_point_cloud(options.inputs.front(), read_options);
+  if (options.poses.size() != options.inputs.size())
+    throw Error("--poses: " + std::to_string(options.poses.size()) + " pose files for " +
+                std::to_string(options.inputs.size()) + " inputs (expected one per input)");
+  std::vector<PointCloud> clouds;
+  std::size_t total = 0;
+  for (std::size_t i = 0; i < options.inputs.size(); ++i) {
+    clouds.push_back(read_point_cloud(options.inputs[i], read_options));
+    const Eigen::Isometry3f pose = read_pose_matrix(options.poses[i]).cast<float>();
+    for (Eigen::Index column = 0; column < clouds.back().positions.cols(); ++column)
+      clouds.back().positions.col(column) = pose * Eigen::Vector3f(clouds.back().positions.col(column));
+    total += clouds.back().size();
+  }
+  PointCloud merged;
+  merged.positions.resize(3, static_cast<Eigen::Index>(total));
+  Eigen::Index column = 0;
+  for (const PointCloud& cloud : clouds) {
+    merged.positions.middleCols(column, cloud.positions.cols()) = cloud.positions;
+    column += cloud.positions.cols();
+  }
+  const bool all_labelled = std::all_of(clouds.begin(), clouds.end(), [](const PointCloud& c) { return !c.labels.empty(); });
+  for (const PointCloud& cloud : clouds) {
+    if (all_labelled) merged.labels.insert(merged.labels.end(), cloud.labels.begin(), cloud.labels.end());
+    for (const auto& [name, values] : clouds.front().extra_fields) {
+      const auto field = cloud.extra_fields.find(name);
+      if (field != cloud.extra_fields.end()) merged.extra_fields[name].insert(merged.extra_fields[name].end(), field->second.begin(), field->second.end());
+    }
+  }
+  for (auto it = merged.extra_fields.begin(); it != merged.extra_fields.end();)
+    it = it->second.size() == total ? std::next(it) : merged.extra_fields.erase(it);
+  return merged;
+}
+
 void run(const ModelCommandOptions& options) {
   ExtractionOptions extraction = extraction_preset(options.preset);
   if (options.plane_method == "cgal")
@@ -117,7 +159,7 @@ void run(const ModelCommandOptions& options) {
 
   CloudReadOptions read_options;
   read_options.format = cloud_format_from_name(options.format);
-  const PointCloud cloud = read_point_cloud(options.input, read_options);
+  const PointCloud cloud = read_merged_clouds(options, read_options);
   std::vector<std::uint32_t> labels;
   if (!options.labels.empty()) {
     labels = read_semantic_kitti_labels(options.labels, cloud.size());
@@ -133,9 +175,12 @@ void run(const ModelCommandOptions& options) {
     ++quadric_counts[{element_class_name(element_class_from_label(model.records[i].label)), quadric_type_name(model.types[i])}];
   for (const Element& element : result.extraction.elements) ++element_counts[element_class_name(element.element_class)];
   const std::string binary_bytes = scene_model_to_binary(model);
-  const double raw_bytes = std::filesystem::exists(options.input) ? static_cast<double>(std::filesystem::file_size(options.input)) : 0.0;
+  double raw_bytes = 0.0;
+  for (const std::string& input : options.inputs)
+    if (std::filesystem::exists(input)) raw_bytes += static_cast<double>(std::filesystem::file_size(input));
 
-  std::string extra = "\"input\": \"" + std::filesystem::path(options.input).filename().string() + "\", \"preset\": \"" +
+  std::string extra = "\"input\": \"" + std::filesystem::path(options.inputs.front()).filename().string() + "\", \"inputs\": " +
+                      std::to_string(options.inputs.size()) + ", \"preset\": \"" +
                       options.preset + "\", \"fitter\": \"" + options.fitter + "\", \"status\": \"" +
                       modelling_status_name(result.status) + "\", \"extraction_status\": \"" +
                       extraction_status_name(result.extraction.status) + "\", \"raw_cloud_bytes\": " +
@@ -149,10 +194,22 @@ void run(const ModelCommandOptions& options) {
   write_scene_model_json(options.out, model, extra);
   if (!options.binary.empty()) write_scene_model_binary(options.binary, model);
   const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
-  if (!options.mesh.empty()) write_mesh_ply(options.mesh, model_mesh(result, points));
+  if (!options.mesh.empty() || !options.picture.empty()) {
+    const TriangleMesh mesh = model_mesh(result, points);
+    if (!options.mesh.empty()) write_mesh_ply(options.mesh, mesh);
+    if (!options.picture.empty()) {
+      if (mesh.triangles.empty()) throw Error("--picture " + options.picture + ": the model has no quadric to draw");
+      MeshPictureOptions view;
+      view.azimuth_deg = options.view_azimuth_deg;
+      view.elevation_deg = options.view_elevation_deg;
+      view.zoom = options.view_zoom;
+      write_mesh_picture(options.picture, mesh, view);
+    }
+  }
   if (!options.elements.empty()) write_point_cloud(options.elements, element_cloud(result, cloud));
 
-  std::printf("quadrix model %s  (%zu points, %zu in range, preset %s, fitter %s)\n", options.input.c_str(), cloud.size(),
+  std::printf("quadrix model %s%s  (%zu points, %zu in range, preset %s, fitter %s)\n", options.inputs.front().c_str(),
+              options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
               result.extraction.points_in_range, options.preset.c_str(), options.fitter.c_str());
   std::printf("status: %s%s%s\n\n", modelling_status_name(result.status).c_str(), result.message.empty() ? "" : " - ",
               result.message.c_str());
@@ -182,7 +239,7 @@ void run(const ModelCommandOptions& options) {
     std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f m", model.ground_normal.x(), model.ground_normal.y(),
                 model.ground_normal.z(), model.ground_offset);
   std::printf("\nwrote %s", options.out.c_str());
-  for (const std::string* path : {&options.binary, &options.mesh, &options.elements})
+  for (const std::string* path : {&options.binary, &options.mesh, &options.elements, &options.picture})
     if (!path->empty()) std::printf(", %s", path->c_str());
   std::printf("\n");
 }
@@ -191,7 +248,12 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   auto options = std::make_shared<ModelCommandOptions>();
   CLI::App* command = app.add_subcommand(
       "model", "Model a point cloud with quadrics (paper's scene representation) and write JSON/binary/mesh");
-  command->add_option("input", options->input, "Point cloud (any supported format)")->required();
+  command->add_option("input", options->inputs, "Point cloud (any supported format); several with --poses are merged")
+      ->required();
+  command->add_option("--poses", options->poses,
+                      "Sensor-to-world pose file (4x4) per input, comma-separated: the inputs are merged in the world "
+                      "frame (TLS stations)")
+      ->delimiter(',');
   std::string presets;
   for (const auto& name : extraction_preset_names()) presets += (presets.empty() ? "" : "|") + name;
   command->add_option("--preset", options->preset, "Sensor preset: " + presets)->capture_default_str();
@@ -209,6 +271,12 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   command->add_option("--binary", options->binary, "Compact binary model (.qsm)");
   command->add_option("--mesh", options->mesh, "PLY mesh of every fitted quadric inside its extent, coloured by type");
   command->add_option("--elements", options->elements, "PLY of the element points, coloured per element");
+  command->add_option("--picture", options->picture, "PNG picture of the mesh (z-buffer rendering, colours by type)");
+  command->add_option("--view-azimuth", options->view_azimuth_deg, "Picture camera azimuth around the up axis, degrees")
+      ->capture_default_str();
+  command->add_option("--view-elevation", options->view_elevation_deg, "Picture camera elevation, degrees (-89..89)")
+      ->capture_default_str();
+  command->add_option("--view-zoom", options->view_zoom, "Picture zoom (> 1 moves the camera closer)")->capture_default_str();
   command->callback([options] { run(*options); });
 });
 
