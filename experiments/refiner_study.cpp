@@ -495,10 +495,7 @@ RefinerStudyResult run_refiner_study(const RefinerStudyOptions& options, const R
 
 namespace {
 
-using report::fixed;
-using report::median;
-using report::number;
-using report::percentile;
+using namespace report;  // number, fixed, median, percentile of the shared study helpers
 
 using RowFilter = std::function<bool(const RefinerStudyRow&)>;
 
