@@ -178,6 +178,7 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
     candidate.factor_count = factors.factors.size();
     candidate.filtered_count = factors.filtered_count;
     if (!options.estimation.refine) {  // ablation: the SVD estimate is the candidate
+      candidate.transform = initial.transform;
       candidate.refinement_status = "skipped";
       candidate.valid = true;
       candidate.note = "refinement disabled (estimation.refine = false)";
