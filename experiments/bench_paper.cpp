@@ -151,7 +151,7 @@ std::string quadricsreg_paper_page(const std::string& results_folder, const std:
   for (const LoadedRun& run : runs) {
     md << "### " << run.info.title << " (`results/" << run.name << "`)\n\n";
     md << "Options: `" << run.info.options_text << "`\n\n";
-    md << "| method | success | no GT | median RTE m | median RRE deg | IR % | CR % | median ms | p90 ms | time / Quadrix | model bytes/frame |\n"
+    md << "| method | success | no GT | median RTE m | median RRE deg | IR % | CR % | median ms | p90 ms | time / Quadrix | median model bytes/frame |\n"
        << "|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const MethodSummary& s : run.summaries)
       md << "| " << s.method << " | " << success_cell(&s) << " | " << s.without_ground_truth << " | "
@@ -160,7 +160,7 @@ std::string quadricsreg_paper_page(const std::string& results_folder, const std:
          << (s.correspondence_recall >= 0.0 ? percent(s.correspondence_recall) : "-") << " | "
          << fixed(s.median_total_ms, "%.0f") << " | " << fixed(s.p90_total_ms, "%.0f") << " | "
          << (s.time_ratio_to_quadrix > 0.0 ? fixed(s.time_ratio_to_quadrix, "%.2f") : "-") << " | "
-         << (s.mean_model_bytes >= 0.0 ? fixed(s.mean_model_bytes, "%.0f") : "-") << " |\n";
+         << (s.median_model_bytes >= 0.0 ? fixed(s.median_model_bytes, "%.0f") : "-") << " |\n";
     const fs::path folder = fs::path(results_folder) / run.name;
     md << "\nPer pair, per difficulty and per stage: [summary.md](" << relative_link(folder / "summary.md", page_folder) << ").\n\n";
     for (const char* plot : {"success_by_difficulty.svg", "error_cdf.svg", "time_per_stage.svg"})

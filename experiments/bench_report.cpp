@@ -203,7 +203,7 @@ std::vector<MethodSummary> summarize_bench(const std::vector<BenchRow>& rows, co
       summary.mean_inlier_ratio = mean(inlier_ratios);
     }
     if (!correspondences.empty()) summary.mean_correspondences = mean(correspondences);
-    if (!bytes.empty()) summary.mean_model_bytes = mean(bytes);
+    if (!bytes.empty()) summary.median_model_bytes = quantile(bytes, 0.5);
     for (const auto& entry : stages) summary.stage_ms[entry.first] = {quantile(entry.second, 0.5), quantile(entry.second, 0.9)};
     if (summary.stage_ms.count("total")) {
       summary.median_total_ms = summary.stage_ms["total"].first;
@@ -240,7 +240,7 @@ std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, 
         "(\"no GT\"). RTE/RRE are medians over successes. IR = mean inlier ratio of the putative correspondences "
         "(0.5 m), CR = correspondence recall (>= 3 inliers). Times run from both clouds in memory to the transform "
         "(Quadrix: both modelling times included even when a model was reused).\n\n";
-  md << "| method | success | no GT | RTE m | RRE deg | IR % | CR % | median ms | p90 ms | time / Quadrix | model bytes/frame |\n";
+  md << "| method | success | no GT | RTE m | RRE deg | IR % | CR % | median ms | p90 ms | time / Quadrix | median model bytes/frame |\n";
   md << "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const MethodSummary& s : summaries) {
     md << "| " << s.method << " | ";
@@ -254,7 +254,7 @@ std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, 
        << (s.correspondence_recall >= 0.0 ? format("%.1f", 100.0 * s.correspondence_recall) : "-") << " | "
        << format("%.1f", s.median_total_ms) << " | " << format("%.1f", s.p90_total_ms) << " | "
        << (s.time_ratio_to_quadrix > 0.0 ? format("%.2f", s.time_ratio_to_quadrix) : "-") << " | "
-       << (s.mean_model_bytes >= 0.0 ? format("%.0f", s.mean_model_bytes) : "-") << " |\n";
+       << (s.median_model_bytes >= 0.0 ? format("%.0f", s.median_model_bytes) : "-") << " |\n";
   }
   const std::vector<std::string> difficulties = difficulty_order(nullptr, summaries);
   if (!difficulties.empty()) {

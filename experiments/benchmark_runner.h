@@ -138,7 +138,7 @@ struct MethodSummary {
   double median_total_ms = 0.0;            ///< median of "total", ms
   double p90_total_ms = 0.0;               ///< 90th percentile of "total", ms
   double time_ratio_to_quadrix = 0.0;      ///< median_total_ms / Quadrix's (0 when Quadrix did not run)
-  double mean_model_bytes = -1.0;          ///< mean binary model bytes per frame (-1: not a model-based method)
+  double median_model_bytes = -1.0;          ///< median binary model bytes per frame (-1: not a model-based method)
   std::vector<double> rte_values;          ///< RTE of every row with ground truth (for CDFs)
   std::vector<double> rre_values;          ///< RRE of every row with ground truth (for CDFs)
 

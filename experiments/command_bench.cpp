@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -26,6 +27,7 @@ namespace {
 struct BenchCommandOptions {
   std::string pairs_file;              ///< --pairs FILE.tsv
   std::vector<std::string> kinds;      ///< --kind: keep only pairs of these kinds
+  std::string ids;                     ///< --ids: keep only pairs whose id matches this regular expression
   std::string kitti_root;              ///< --kitti ROOT
   std::string sequence = "00";         ///< --seq
   std::string mode = "lc";             ///< --mode lc | odo
@@ -90,6 +92,19 @@ std::vector<BenchPair> collect_pairs(const BenchCommandOptions& options, std::st
     pairs = std::move(kept);
     text << " --kind";
     for (const std::string& kind : options.kinds) text << " " << kind;
+  }
+  if (!options.ids.empty()) {
+    std::regex pattern;
+    try {
+      pattern = std::regex(options.ids);
+    } catch (const std::regex_error& error) {
+      throw Error("--ids '" + options.ids + "': not a regular expression (" + error.what() + ")");
+    }
+    std::vector<BenchPair> kept;
+    for (BenchPair& pair : pairs)
+      if (std::regex_search(pair.id, pattern)) kept.push_back(std::move(pair));
+    pairs = std::move(kept);
+    text << " --ids '" << options.ids << "'";
   }
   if (pairs.empty()) throw Error("no pair to run (" + text.str() + ")");
   for (const BenchPair& pair : pairs)
@@ -190,6 +205,7 @@ const CommandRegistration registration(70, [](CLI::App& app) {
       "bench", "Benchmark Quadrix and the baselines on many pairs (success, RTE/RRE, IR/CR, time per stage, model bytes)");
   command->add_option("--pairs", options->pairs_file, "Pairs file in the format of ../shared/data/pairs.tsv (paths relative to it)");
   command->add_option("--kind", options->kinds, "Keep only pairs of these kinds (pairs.tsv `kind`, e.g. loop_closure)")->delimiter(',');
+  command->add_option("--ids", options->ids, "Keep only pairs whose id matches this regular expression (e.g. '^kitti00_lc')");
   command->add_option("--kitti", options->kitti_root, "KITTI-layout root: sequences/SS/velodyne/NNNNNN.bin and poses/SS.txt");
   command->add_option("--seq", options->sequence, "KITTI sequence")->capture_default_str();
   command->add_option("--mode", options->mode, "lc: loop-closure pairs (paper Eq. loop pair gen); odo: odometry pairs")
