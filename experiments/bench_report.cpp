@@ -93,6 +93,18 @@ std::string escape_xml(const std::string& text) {
   return escaped;
 }
 
+// Closes an SVG document after a legend of one coloured square per method at (x, top).
+std::string with_method_legend(const std::string& body, const std::vector<MethodSummary>& summaries, int x, int top) {
+  std::ostringstream svg;
+  svg << body;
+  for (std::size_t m = 0; m < summaries.size(); ++m)
+    svg << "<rect x=\"" << x << "\" y=\"" << top + 18 * static_cast<int>(m) << "\" width=\"12\" height=\"12\" fill=\""
+        << colour(m) << "\"/><text x=\"" << x + 18 << "\" y=\"" << top + 10 + 18 * static_cast<int>(m) << "\">"
+        << escape_xml(summaries[m].method) << "</text>\n";
+  svg << "</svg>\n";
+  return svg.str();
+}
+
 // Stage order of the time plot and table: pipeline order, then anything else alphabetically, total last.
 std::vector<std::string> ordered_stages(const std::map<std::string, std::pair<double, double>>& stages) {
   static const std::vector<std::string> pipeline{"modelling_source", "modelling_target", "correspondences", "graphs",
@@ -499,12 +511,7 @@ std::string bench_success_svg(const std::vector<MethodSummary>& summaries) {
     svg << "<text x=\"" << x0 + 12 * static_cast<int>(summaries.size()) << "\" y=\"" << top + plot_height + 18
         << "\" text-anchor=\"middle\">" << escape_xml(difficulties[d]) << "</text>\n";
   }
-  for (std::size_t m = 0; m < summaries.size(); ++m)
-    svg << "<rect x=\"" << width - 170 << "\" y=\"" << top + 18 * static_cast<int>(m) << "\" width=\"12\" height=\"12\" fill=\""
-        << colour(m) << "\"/><text x=\"" << width - 152 << "\" y=\"" << top + 10 + 18 * static_cast<int>(m) << "\">"
-        << escape_xml(summaries[m].method) << "</text>\n";
-  svg << "</svg>\n";
-  return svg.str();
+  return with_method_legend(svg.str(), summaries, width - 170, top);
 }
 
 std::string bench_error_cdf_svg(const std::vector<MethodSummary>& summaries) {
@@ -552,12 +559,7 @@ std::string bench_error_cdf_svg(const std::vector<MethodSummary>& summaries) {
       svg << "<polyline fill=\"none\" stroke-width=\"2\" stroke=\"" << colour(m) << "\" points=\"" << points.str() << "\"/>\n";
     }
   }
-  for (std::size_t m = 0; m < summaries.size(); ++m)
-    svg << "<rect x=\"" << width - 170 << "\" y=\"" << top + 18 * static_cast<int>(m) << "\" width=\"12\" height=\"12\" fill=\""
-        << colour(m) << "\"/><text x=\"" << width - 152 << "\" y=\"" << top + 10 + 18 * static_cast<int>(m) << "\">"
-        << escape_xml(summaries[m].method) << "</text>\n";
-  svg << "</svg>\n";
-  return svg.str();
+  return with_method_legend(svg.str(), summaries, width - 170, top);
 }
 
 std::string bench_time_svg(const std::vector<MethodSummary>& summaries) {

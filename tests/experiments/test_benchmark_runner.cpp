@@ -1,6 +1,7 @@
 // The benchmark harness: a run split in 3 shards and merged gives exactly the outputs of one run;
 // rows round-trip through CSV; pairs without ground truth are never counted; ablations are applied;
 // and on real KITTI pairs Quadrix is run through the cache with (and without) random yaw trials.
+#include "experiments/bench_paper.h"
 #include "experiments/benchmark_runner.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
@@ -168,6 +169,40 @@ TEST_F(BenchFolder, RowsRoundTripThroughCsvExactly) {
   }
 }
 
+TEST_F(BenchFolder, PaperPagePutsOurAblationRunBesideThePaperRow) {
+  BenchOptions options;
+  options.methods = {"quadrix-stand-in"};
+  register_bench_method("quadrix-stand-in", fake_method);
+  options.progress = false;
+  const std::vector<BenchRow> rows = run_benchmark(tiny_pairs(folder_, 3), options);
+  std::vector<BenchRow> as_quadrix = rows;
+  for (BenchRow& row : as_quadrix) row.method = "quadrix";
+  BenchRunInfo info;
+  info.title = "ks25 run";
+  info.methods = {"quadrix"};
+  info.task_count = 3;
+  info.options_text = "--ablation ks25";
+  write_bench_outputs((folder_ / "results" / "ablation-ks25").string(), as_quadrix, info);
+  fs::create_directories(folder_ / "tables");
+  std::ofstream(folder_ / "tables" / "ablation.csv")
+      << "dataset,module,setting,sequence,level,success_rate_percent\n"
+      << "KITTI-LC,correspondence establishment,K_s=25,00,easy,100.00\n"
+      << "KITTI-LC,correspondence establishment,K_s=25,02,easy,93.60\n";
+  const std::string page =
+      quadricsreg_paper_page((folder_ / "results").string(), (folder_ / "tables").string(), folder_.string());
+  // Pairs 0 and 1 have ground truth; pair 0 succeeds: 1 of 2.
+  EXPECT_NE(page.find("| correspondence establishment | K_s=25 | 100.00 | `--ablation ks25` | 50.0 (1/2) |"), std::string::npos)
+      << page;
+  EXPECT_EQ(page.find("93.60 | `--ablation"), std::string::npos) << "only sequence 00 is beside ours";
+  std::ofstream(folder_ / "tables" / "broken.csv") << "a,b\n1,2,3\n";
+  try {
+    quadricsreg_paper_page((folder_ / "results").string(), (folder_ / "tables").string(), folder_.string());
+    FAIL() << "a malformed table was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("broken.csv:2"), std::string::npos) << error.what();
+  }
+}
+
 TEST(BenchAblations, OptionsAndModelsChangeAsTheTableRowSays) {
   RegistrationOptions options;
   apply_ablation("ks25", options);
@@ -220,6 +255,14 @@ TEST_F(BenchFolder, QuadrixOnRealKittiPairsWithAndWithoutYawTrials) {
       EXPECT_TRUE(row.timings_ms.count(stage)) << stage;
   }
   EXPECT_EQ(plain[0].timings_ms.at("modelling_target"), plain[1].timings_ms.at("modelling_target"));  // built once
+
+  // The no-refinement ablation keeps each candidate's SVD estimate (not the identity).
+  BenchOptions unrefined = options;
+  unrefined.ablation = "no-refinement";
+  const std::vector<BenchRow> svd_only = run_benchmark({pairs[0]}, unrefined);
+  ASSERT_EQ(svd_only.size(), 1u);
+  EXPECT_TRUE(svd_only[0].success) << "RTE " << svd_only[0].rte << " RRE " << svd_only[0].rre << " " << svd_only[0].message;
+  EXPECT_NE(svd_only[0].rte, plain[0].rte);
 
   // Random yaw about the up axis: the ground truth follows the perturbation.
   options.yaw_range_degrees = 180.0;

@@ -65,6 +65,14 @@ std::set<std::pair<int, int>> loop_pairs_by_rule(const std::vector<int>& frames,
   return expected;
 }
 
+// LiDAR poses P(i) Tr of every frame of sequence 00.
+std::vector<Eigen::Isometry3d> sequence00_lidar_poses() {
+  const Eigen::Isometry3d tr = read_kitti_calibration(shared_data_path("kitti_poses/calib_Tr_velo_to_cam.txt"), 0);
+  std::vector<Eigen::Isometry3d> lidar;
+  for (const Eigen::Isometry3d& pose : read_kitti_poses(shared_data_path("kitti_poses/00.txt"))) lidar.push_back(pose * tr);
+  return lidar;
+}
+
 int frame_of(const std::string& path) { return std::stoi(fs::path(path).stem().string()); }
 
 TEST_F(TinyKitti, LoopClosureRuleGivesExactlyThePairsOfThePaperEquation) {
@@ -119,9 +127,7 @@ TEST_F(TinyKitti, OdometryRuleTakesTheFrameWhoseDistanceIsClosestToDOdo) {
 
 TEST(KittiPairs, UniformSpatialSamplingKeepsTheCapFromRulePairsSpreadOverSpace) {
   QUADRIX_REQUIRE_SHARED_DATA("kitti_poses/00.txt");
-  const Eigen::Isometry3d tr = read_kitti_calibration(shared_data_path("kitti_poses/calib_Tr_velo_to_cam.txt"), 0);
-  std::vector<Eigen::Isometry3d> lidar;
-  for (const Eigen::Isometry3d& pose : read_kitti_poses(shared_data_path("kitti_poses/00.txt"))) lidar.push_back(pose * tr);
+  const std::vector<Eigen::Isometry3d> lidar = sequence00_lidar_poses();
   const KittiSequence sequence = kitti_sequence_from_poses("00", lidar);
   const DistanceBin bin{10.0, 20.0};
   LoopClosureOptions all;
@@ -152,9 +158,7 @@ TEST(KittiPairs, UniformSpatialSamplingKeepsTheCapFromRulePairsSpreadOverSpace) 
 
 TEST(KittiPairs, PublishedListsAreReadExactlyAndSatisfyTheLoopRule) {
   QUADRIX_REQUIRE_SHARED_DATA("kitti_poses/lc_sample/KITTI/test_0_10.txt");
-  const Eigen::Isometry3d tr = read_kitti_calibration(shared_data_path("kitti_poses/calib_Tr_velo_to_cam.txt"), 0);
-  std::vector<Eigen::Isometry3d> lidar;
-  for (const Eigen::Isometry3d& pose : read_kitti_poses(shared_data_path("kitti_poses/00.txt"))) lidar.push_back(pose * tr);
+  const std::vector<Eigen::Isometry3d> lidar = sequence00_lidar_poses();
   const KittiSequence sequence = kitti_sequence_from_poses("00", lidar);
   LoopClosureOptions all;
   all.pairs_per_bin = 100000000;
