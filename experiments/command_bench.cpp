@@ -108,7 +108,7 @@ std::vector<BenchPair> collect_pairs(const BenchCommandOptions& options, std::st
   }
   if (pairs.empty()) throw Error("no pair to run (" + text.str() + ")");
   for (const BenchPair& pair : pairs)
-    if (pair.source.empty() || pair.target.empty())
+    if (!options.print_pairs && (pair.source.empty() || pair.target.empty()))
       throw Error("pair " + pair.id + " has no cloud files: give --kitti ROOT holding sequences/SS/velodyne");
   description = text.str();
   return pairs;
