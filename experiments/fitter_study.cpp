@@ -3,6 +3,7 @@
 #include "experiments/fitter_study.h"
 
 #include "experiments/study_report.h"
+#include "fitting/extraction.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 
@@ -426,6 +427,57 @@ std::vector<RealSegment> real_fitter_segments(const std::string& data_root, int 
   return segments;
 }
 
+std::vector<RealSegment> kitti_fitter_segments(const std::string& data_root, int max_points, int facades, int poles,
+                                               std::vector<std::string>& notes) {
+  std::vector<RealSegment> segments;
+  const std::filesystem::path path = std::filesystem::path(data_root) / "kitti00" / "velodyne" / "000000.bin";
+  if (!std::filesystem::exists(path)) {
+    notes.push_back("skipped the KITTI segments: " + path.string() + " is absent");
+    return segments;
+  }
+  const PointCloud cloud = read_point_cloud(path.string());
+  const ExtractionResult extraction = extract_elements(cloud, extraction_preset("vlp64"));
+  const Eigen::Matrix3Xd all = cloud.positions.cast<double>();
+  // Largest elements of a class first (ties by extraction order, which is deterministic).
+  const auto largest = [&](ElementClass element_class, int count) {
+    std::vector<const Element*> found;
+    for (const Element& element : extraction.elements)
+      if (element.element_class == element_class) found.push_back(&element);
+    std::stable_sort(found.begin(), found.end(),
+                     [](const Element* a, const Element* b) { return a->point_indices.size() > b->point_indices.size(); });
+    if (static_cast<int>(found.size()) > count) found.resize(static_cast<std::size_t>(std::max(count, 0)));
+    return found;
+  };
+  const auto points_of = [&](const Element& element) {
+    const std::vector<Eigen::Index> indices(element.point_indices.begin(), element.point_indices.end());
+    return thin(select(all, indices), max_points);
+  };
+  const std::string source = "KITTI 00 frame 0, extract_elements with preset vlp64 (geometry-only classes)";
+  int rank = 0;
+  for (const Element* element : largest(ElementClass::Plane, facades)) {
+    ++rank;
+    RealSegment facade{"kitti_facade_" + std::to_string(rank), QuadricType::Plane, points_of(*element), ""};
+    facade.how = source + ": plane element #" + std::to_string(rank) + " by size (" +
+                 std::to_string(element->point_indices.size()) + " points, thinned to " +
+                 std::to_string(facade.points.cols()) + "), fitted as a plane";
+    segments.push_back(std::move(facade));
+  }
+  rank = 0;
+  for (const Element* element : largest(ElementClass::Line, poles)) {
+    ++rank;
+    const std::string name = "kitti_pole_" + std::to_string(rank);
+    const std::string how = source + ": line element #" + std::to_string(rank) + " by size (" +
+                            std::to_string(element->point_indices.size()) +
+                            " points; a pole or a tree trunk, the data has no labels to tell them apart)";
+    const Eigen::Matrix3Xd points = points_of(*element);
+    segments.push_back({name, QuadricType::CircularCylinder, points, how + ", fitted as a circular cylinder"});
+    segments.push_back({name + "_line", QuadricType::Line, points, how + ", fitted as a line"});
+  }
+  if (segments.empty())
+    notes.push_back("the KITTI extraction (" + extraction_status_name(extraction.status) + ") gave no plane or line element");
+  return segments;
+}
+
 FitterStudyResult run_fitter_study(const FitterStudyOptions& options, const StudyProgress& progress) {
   const auto start = std::chrono::steady_clock::now();
   FitterStudyResult result;
@@ -464,8 +516,12 @@ FitterStudyResult run_fitter_study(const FitterStudyOptions& options, const Stud
   std::vector<std::string> notes;
   std::vector<RealSegment> real;
   if (options.real_data) {
-    if (std::filesystem::exists(options.data_root)) real = real_fitter_segments(options.data_root, options.real_segment_max_points, notes);
-    else notes.push_back("skipped the real segments: data folder " + options.data_root + " is absent");
+    if (std::filesystem::exists(options.data_root)) {
+      real = real_fitter_segments(options.data_root, options.real_segment_max_points, notes);
+      for (RealSegment& segment : kitti_fitter_segments(options.data_root, options.real_segment_max_points,
+                                                        options.kitti_facades, options.kitti_poles, notes))
+        real.push_back(std::move(segment));
+    } else notes.push_back("skipped the real segments: data folder " + options.data_root + " is absent");
   }
   result.real_notes = notes;
   for (const auto& segment : real) result.real_notes.push_back(segment.name + " - " + segment.how);
@@ -574,7 +630,6 @@ std::vector<double> distinct(const FitterStudyResult& result, double FitterStudy
   return {values.begin(), values.end()};
 }
 
-using report::kPalette;
 
 }  // namespace
 
@@ -710,15 +765,17 @@ void write_fitter_study_markdown(const std::string& path, const FitterStudyResul
     }
 
     out << "\n## Time per fit\n\nHinted synthetic fits (" << options.points_per_segment
-        << " points), milliseconds; 2 shared cores, " << options.threads << " fits at a time.\n\n| fitter | median | 90th percentile |\n|---|---:|---:|\n";
+        << " points), milliseconds, including the exact residual evaluation on every point (bench_fitters times the fit "
+           "alone); 2 shared cores, " << options.threads << " fits at a time.\n\n| fitter | median | 90th percentile |\n|---|---:|---:|\n";
     for (const auto& fitter : result.fitters) {
       const auto rows = synthetic_hint(fitter);
       const auto times = column(rows, [](const FitterStudyRow& r) { return r.time_ms; });
       out << "| " << fitter << " | " << fixed(median(times), 3) << " | " << fixed(percentile(times, 0.9), 3) << " |\n";
     }
 
-    out << "\n## Real segments\n\nNo ground truth: the table is fitted as a plane, the mug and the lamppost's pole as "
-           "circular cylinders (radius shown) and the pole also as a line. How each segment was cut:\n\n";
+    out << "\n## Real segments\n\nNo ground truth: the table and the KITTI facades are fitted as planes; the mug, the "
+           "lamppost's pole and the KITTI poles/trunks as circular cylinders (radius shown) and the poles also as lines. "
+           "Residuals are exact orthogonal distances over every fitted point. How each segment was cut:\n\n";
     for (const auto& note : result.real_notes) out << "- " << note << '\n';
     const auto real_rows = rows_where(result, [](const FitterStudyRow& r) { return r.source != "synthetic"; });
     if (!real_rows.empty()) {
@@ -735,74 +792,69 @@ void write_fitter_study_markdown(const std::string& path, const FitterStudyResul
 }
 
 void write_fitter_study_svg(const std::string& path, const FitterStudyResult& result) {
-  // Two panels: median scale error (log scale) against noise and against visible fraction.
-  const double width = 900, height = 380, panel_width = 380, panel_height = 270, top = 50, left_margin = 70;
-  const double log_low = -3.0, log_high = 2.0;  // 0.001% .. 100%
-  struct Panel {
-    std::string title, x_label;
+  // Median scale error (log axis, %) of the hinted synthetic fits against each grid factor, and the
+  // median time per fit per type, one line per fitter (report::write_line_panels_svg).
+  struct Factor {
+    std::string title, x_label, unit;
     double FitterStudyRow::*field;
-    double display_scale;
     std::function<bool(const FitterStudyRow&)> filter;
   };
-  const std::vector<Panel> panels = {
-      {"median scale error vs noise (no outliers)", "noise sigma [cm]", &FitterStudyRow::noise, 100.0,
+  const std::vector<Factor> factors = {
+      {"median scale error vs noise (no outliers)", "noise sigma", " cm", &FitterStudyRow::noise,
        [](const FitterStudyRow& r) { return r.outlier_fraction == 0.0; }},
-      {"median scale error vs visible fraction (noise <= 2 cm, no outliers)", "visible fraction [%]", &FitterStudyRow::visible_fraction,
-       100.0, [](const FitterStudyRow& r) { return r.outlier_fraction == 0.0 && r.noise <= 0.02 + 1e-12; }},
+      {"median scale error vs visible fraction (noise ≤ 2 cm, no outliers)", "visible fraction", "%",
+       &FitterStudyRow::visible_fraction, [](const FitterStudyRow& r) { return r.outlier_fraction == 0.0 && r.noise <= 0.02 + 1e-12; }},
+      {"median scale error vs outliers (noise ≤ 2 cm)", "outlier fraction", "%", &FitterStudyRow::outlier_fraction,
+       [](const FitterStudyRow& r) { return r.noise <= 0.02 + 1e-12; }},
   };
-  write_file_atomically(path, [&](std::ostream& out) {
-    out << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
-        << "\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-    for (std::size_t p = 0; p < panels.size(); ++p) {
-      const Panel& panel = panels[p];
-      const double x0 = left_margin + static_cast<double>(p) * (panel_width + 60.0);
-      const std::vector<double> levels = distinct(result, panel.field);
-      if (levels.empty()) continue;
-      out << "<text x=\"" << x0 << "\" y=\"" << top - 15 << "\" font-weight=\"bold\">" << panel.title << "</text>\n";
-      out << "<rect x=\"" << x0 << "\" y=\"" << top << "\" width=\"" << panel_width << "\" height=\"" << panel_height
-          << "\" fill=\"none\" stroke=\"black\"/>\n";
-      const auto y_of = [&](double percent) {
-        const double value = std::clamp(std::log10(std::max(percent, 1e-9)), log_low, log_high);
-        return top + panel_height * (log_high - value) / (log_high - log_low);
-      };
-      const auto x_of = [&](std::size_t index) {
-        return levels.size() == 1 ? x0 + panel_width / 2 : x0 + 20.0 + (panel_width - 40.0) * static_cast<double>(index) / static_cast<double>(levels.size() - 1);
-      };
-      for (double decade = log_low; decade <= log_high + 1e-9; decade += 1.0) {
-        const double y = y_of(std::pow(10.0, decade));
-        out << "<line x1=\"" << x0 << "\" y1=\"" << y << "\" x2=\"" << x0 + panel_width << "\" y2=\"" << y
-            << "\" stroke=\"#ddd\"/>\n<text x=\"" << x0 - 5 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">"
-            << number(std::pow(10.0, decade), 3) << "%</text>\n";
+  const auto synthetic_hint = [&](const std::string& fitter, const std::function<bool(const FitterStudyRow&)>& test) {
+    return rows_where(result, [&](const FitterStudyRow& r) {
+      return r.source == "synthetic" && r.mode == "hint" && r.fitter == fitter && test(r);
+    });
+  };
+  std::vector<report::PlotPanel> panels;
+  for (const Factor& factor : factors) {
+    report::PlotPanel panel;
+    panel.title = factor.title;
+    panel.x_label = factor.x_label;
+    panel.y_label = "%";
+    panel.log_y = true;
+    panel.y_low = 1e-3;
+    panel.y_high = 1e2;
+    const std::vector<double> levels = distinct(result, factor.field);
+    for (const double level : levels) panel.x_ticks.push_back(fixed(100.0 * level, 0) + factor.unit);
+    for (const auto& fitter : result.fitters) {
+      report::PlotSeries series{fitter, {}};
+      for (const double level : levels) {
+        const auto rows = synthetic_hint(fitter, [&](const FitterStudyRow& r) {
+          return r.*(factor.field) == level && factor.filter(r) && family_ok(r);
+        });
+        series.values.push_back(100.0 * median(column(rows, [](const FitterStudyRow& r) { return r.scale_error; })));
       }
-      for (std::size_t i = 0; i < levels.size(); ++i)
-        out << "<text x=\"" << x_of(i) << "\" y=\"" << top + panel_height + 15 << "\" text-anchor=\"middle\">"
-            << fixed(panel.display_scale * levels[i], 0) << "</text>\n";
-      out << "<text x=\"" << x0 + panel_width / 2 << "\" y=\"" << top + panel_height + 32 << "\" text-anchor=\"middle\">"
-          << panel.x_label << "</text>\n";
-      for (std::size_t f = 0; f < result.fitters.size(); ++f) {
-        std::string points;
-        for (std::size_t i = 0; i < levels.size(); ++i) {
-          const auto rows = rows_where(result, [&](const FitterStudyRow& r) {
-            return r.source == "synthetic" && r.mode == "hint" && r.fitter == result.fitters[f] && r.*(panel.field) == levels[i] &&
-                   panel.filter(r) && family_ok(r);
-          });
-          const double value = 100.0 * median(column(rows, [](const FitterStudyRow& r) { return r.scale_error; }));
-          if (!std::isfinite(value)) continue;
-          points += number(x_of(i), 6) + "," + number(y_of(value), 6) + " ";
-        }
-        const char* colour = kPalette[f % kPalette.size()];
-        if (!points.empty())
-          out << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"2\" points=\"" << points << "\"/>\n";
-      }
+      panel.series.push_back(std::move(series));
     }
-    for (std::size_t f = 0; f < result.fitters.size(); ++f) {
-      const double x = left_margin + 110.0 * static_cast<double>(f);
-      const double y = height - 22;
-      out << "<rect x=\"" << x << "\" y=\"" << y - 9 << "\" width=\"14\" height=\"4\" fill=\"" << kPalette[f % kPalette.size()]
-          << "\"/>\n<text x=\"" << x + 18 << "\" y=\"" << y - 4 << "\">" << result.fitters[f] << "</text>\n";
-    }
-    out << "</svg>\n";
-  });
+    panels.push_back(std::move(panel));
+  }
+  std::set<QuadricType> type_set;
+  for (const auto& row : result.rows)
+    if (row.source == "synthetic") type_set.insert(row.true_type);
+  report::PlotPanel timing;
+  timing.title = "median time per fit (exact residuals included)";
+  timing.x_label = "type";
+  timing.y_label = " ms";
+  timing.log_y = true;
+  timing.y_low = 1e-3;
+  timing.y_high = 1e4;
+  for (const QuadricType type : type_set) timing.x_ticks.push_back(quadric_type_name(type));
+  for (const auto& fitter : result.fitters) {
+    report::PlotSeries series{fitter, {}};
+    for (const QuadricType type : type_set)
+      series.values.push_back(median(column(synthetic_hint(fitter, [&](const FitterStudyRow& r) { return r.true_type == type; }),
+                                            [](const FitterStudyRow& r) { return r.time_ms; })));
+    timing.series.push_back(std::move(series));
+  }
+  panels.push_back(std::move(timing));
+  report::write_line_panels_svg(path, panels, 2);
 }
 
 }  // namespace quadrix

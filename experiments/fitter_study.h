@@ -62,6 +62,8 @@ struct FitterStudyOptions {
   std::string data_root = "../shared/data";                              ///< folder of the real data
   int threads = 2;                                                       ///< worker threads (fits run concurrently: times include contention)
   int real_segment_max_points = 5000;                                    ///< real segments are thinned to at most this many points (every k-th)
+  int kitti_facades = 3;                                                 ///< largest KITTI plane elements fitted as planes
+  int kitti_poles = 4;                                                   ///< largest KITTI line elements (poles, trunks) fitted as cylinders and lines
 };
 
 /// One fit in the study.
@@ -112,6 +114,13 @@ struct RealSegment {
 /// The real segments: the table scene's table plane and mug (as a cylinder), the lamppost's pole (as
 /// a cylinder and as a line). Missing files are skipped and named in `notes`.
 std::vector<RealSegment> real_fitter_segments(const std::string& data_root, int max_points, std::vector<std::string>& notes);
+
+/// Real KITTI segments cut by the project's own extraction (extract_elements, preset vlp64, geometry-only
+/// classes) from kitti00/velodyne/000000.bin: the `facades` largest Plane elements fitted as planes and the
+/// `poles` largest Line elements (poles and tree trunks: the data has no labels to tell them apart)
+/// fitted as circular cylinders and as lines. A missing file is skipped and named in `notes`.
+std::vector<RealSegment> kitti_fitter_segments(const std::string& data_root, int max_points, int facades, int poles,
+                                               std::vector<std::string>& notes);
 
 /// Writes one CSV row per fit (header first), atomically.
 void write_fitter_study_csv(const std::string& path, const FitterStudyResult& result);

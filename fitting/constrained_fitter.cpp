@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <string>
@@ -522,6 +523,28 @@ Solution solve(QuadricType type, const Eigen::Matrix3Xd& unit, const CanonicalSh
   }
 }
 
+/// Sagitta r (1 - cos(min(span, pi) / 2)) of the arc the points cover around a circular cylinder's
+/// axis (span = 2 pi minus the largest angular gap between them) and their RMS distance to it: the
+/// depth of curvature the points show against their scatter.
+std::pair<double, double> cylinder_arc_sagitta(const Eigen::Matrix3Xd& unit, const CanonicalShape& shape) {
+  const Eigen::Matrix3d frame = frame_with_axis_c(shape.rotation.col(2));
+  const double radius = shape.scale(0);
+  std::vector<double> angles;
+  angles.reserve(static_cast<std::size_t>(unit.cols()));
+  double sum_squared = 0.0;
+  for (Eigen::Index i = 0; i < unit.cols(); ++i) {
+    const Eigen::Vector3d local = frame.transpose() * (unit.col(i) - shape.center);
+    angles.push_back(std::atan2(local.y(), local.x()));
+    sum_squared += std::pow(local.head<2>().norm() - radius, 2);
+  }
+  if (angles.empty()) return {0.0, 0.0};
+  std::sort(angles.begin(), angles.end());
+  double largest_gap = angles.front() + 2.0 * kPi - angles.back();
+  for (std::size_t i = 1; i < angles.size(); ++i) largest_gap = std::max(largest_gap, angles[i] - angles[i - 1]);
+  const double span = std::min(2.0 * kPi - largest_gap, kPi);
+  return {radius * (1.0 - std::cos(span / 2.0)), std::sqrt(sum_squared / static_cast<double>(unit.cols()))};
+}
+
 // ---- The fitter --------------------------------------------------------------------------------
 
 bool is_supported(QuadricType type) {
@@ -674,6 +697,19 @@ class ConstrainedFitter final : public QuadricFitter {
       if (usable(final_solution)) best = final_solution;
     }
     const CanonicalShape& shape = best->shape;
+    if (type == QuadricType::CircularCylinder) {
+      const auto [sagitta, rms] = cylinder_arc_sagitta(start_unit, shape);
+      if (sagitta < options_.minimum_sagitta_ratio * rms) {
+        result.status = FitStatus::Degenerate;
+        char text[220];
+        std::snprintf(text, sizeof(text),
+                      "the points do not show the cylinder's curvature: the sagitta of their arc (%.3g m at radius "
+                      "%.3g m) is below %.3g x the residual (%.3g m)",
+                      sagitta * radius, shape.scale(0) * radius, options_.minimum_sagitta_ratio, rms * radius);
+        result.message = text;
+        return result;
+      }
+    }
     const int defined = (type == QuadricType::Sphere || type == QuadricType::Ellipsoid) ? 3 : 2;
     const double largest = is_cone(type) ? std::max(shape.scale.head<2>().maxCoeff(), shape.center.norm())
                                          : shape.scale.head(defined).maxCoeff();

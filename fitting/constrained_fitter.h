@@ -43,6 +43,10 @@ struct ConstrainedFitterOptions {
   /// Largest radius / scale (relative to the RMS radius of the points) accepted before the fit is
   /// reported Degenerate (nearly flat points make a cylinder or sphere radius diverge).
   double largest_relative_scale = 1e3;
+  /// A circular cylinder is reported Degenerate when the sagitta of the arc its points cover,
+  /// r (1 - cos(min(span, pi) / 2)), is below this times their RMS distance to it: a narrow, noisy
+  /// strip (a sparse LiDAR pole seen by a few rings) fits any large radius about equally well.
+  double minimum_sagitta_ratio = 1.0;
   /// Types tried without a hint; the one with the lowest BIC = n ln(RSS/n) + k ln(n) is returned
   /// (k = the type's degrees of freedom), so a more general type must explain the points clearly better.
   std::vector<QuadricType> automatic_types = {QuadricType::Plane,       QuadricType::Line,

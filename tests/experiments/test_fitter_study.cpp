@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -147,6 +148,16 @@ TEST(FitterStudy, WritesCsvMarkdownAndSvg) {
   EXPECT_THAT(svg, ::testing::StartsWith("<svg"));
   EXPECT_THAT(svg, ::testing::HasSubstr("</svg>"));
   EXPECT_THAT(svg, ::testing::HasSubstr("<polyline"));
+  // The plot check: four panels (three factors and the time per fit) and a legend entry per fitter.
+  std::size_t panels = 0;
+  for (std::size_t at = svg.find("font-weight=\"bold\""); at != std::string::npos; at = svg.find("font-weight=\"bold\"", at + 1))
+    ++panels;
+  EXPECT_EQ(panels, 4u);
+  // Well-formed markup: every '<' opens a tag (titles must not carry a raw "<=").
+  for (std::size_t at = svg.find('<'); at != std::string::npos; at = svg.find('<', at + 1))
+    EXPECT_TRUE(std::isalpha(static_cast<unsigned char>(svg[at + 1])) || svg[at + 1] == '/')
+        << "raw '<' in the SVG at " << svg.substr(at, 30);
+  for (const auto& fitter : result.fitters) EXPECT_THAT(svg, ::testing::HasSubstr(">" + fitter + "</text>"));
   std::filesystem::remove_all(folder);
 }
 
@@ -177,6 +188,33 @@ TEST(FitterStudy, RealSegmentsArePlausible) {
   const QuadricFit table = fitter->fit(segments[0].points, Eigen::Matrix3Xd(), QuadricType::Plane);
   ASSERT_EQ(table.status, FitStatus::Ok);
   EXPECT_LT(table.residual_rms, 0.01);
+}
+
+/// The KITTI segments come from the project's own extraction: large facades that a plane fits to
+/// centimetres, and poles/trunks whose cylinder is near-vertical with a radius under half a metre.
+TEST(FitterStudy, KittiSegmentsFromTheExtraction) {
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/000000.bin");
+  std::vector<std::string> notes;
+  const auto segments = kitti_fitter_segments(::quadrix::testing::shared_data_root().string(), 5000, 2, 2, notes);
+  ASSERT_EQ(segments.size(), 6u) << (notes.empty() ? "" : notes.front());
+  const auto fitter = make_quadric_fitter("constrained");
+  for (const auto& segment : segments) {
+    EXPECT_GE(segment.points.cols(), 15) << segment.name;
+    EXPECT_LE(segment.points.cols(), 5000) << segment.name;
+    const QuadricFit fit = fitter->fit(segment.points, Eigen::Matrix3Xd(), segment.type);
+    if (segment.type == QuadricType::Plane) {
+      ASSERT_EQ(fit.status, FitStatus::Ok) << segment.name << ": " << fit.message;
+      EXPECT_GT(segment.points.cols(), 200) << segment.name;
+      EXPECT_LT(fit.residual_rms, 0.1) << segment.name;
+      EXPECT_LT(std::abs(fit.shape.rotation.col(0).z()), std::sin(20.0 * kPi / 180.0)) << segment.name << ": a facade is upright";
+    } else if (segment.type == QuadricType::Line) {
+      ASSERT_EQ(fit.status, FitStatus::Ok) << segment.name << ": " << fit.message;
+      EXPECT_GT(std::abs(fit.shape.rotation.col(2).z()), std::cos(30.0 * kPi / 180.0)) << segment.name << ": poles stand";
+    } else if (fit.status == FitStatus::Ok) {  // sparse rings may leave a pole's cylinder undetermined: a status
+      EXPECT_LT(fit.shape.scale(0), 0.5) << segment.name << ": " << segment.points.cols() << " points, residual "
+                                         << fit.residual_rms << " m, statistical scales " << fit.statistics.scale.transpose();
+    }
+  }
 }
 
 }  // namespace
