@@ -17,6 +17,7 @@ struct FitCommandOptions {
   std::string type = "auto";     ///< requested quadric type or auto
   std::string fitter = "statistical";  ///< registry name of the fitter
   std::string format = "auto";   ///< input format override
+  std::string residuals = "exact";  ///< residual evaluation: exact (every point), subsample or skip
 };
 
 nlohmann::json fit_to_json(const QuadricFit& fit, const std::string& fitter_name, std::size_t point_count) {
@@ -45,6 +46,9 @@ nlohmann::json fit_to_json(const QuadricFit& fit, const std::string& fitter_name
   result["residual_max"] = fit.residual_max;
   result["f_p2s"] = fit.algebraic_distance;
   result["time_ms"] = fit.time_ms;
+  result["residual_evaluation"] = residual_evaluation_name(fit.residual_evaluation);
+  result["residual_points"] = fit.residual_points;
+  result["evaluation_ms"] = fit.evaluation_ms;
   return result;
 }
 
@@ -58,11 +62,17 @@ const CommandRegistration registration(40, [](CLI::App& app) {
   std::string fitter_names;
   for (const auto& name : quadric_fitter_names()) fitter_names += (fitter_names.empty() ? "" : ", ") + name;
   command->add_option("--fitter", options->fitter, "Fitter: " + fitter_names)->capture_default_str();
+  command->add_option("--residuals", options->residuals,
+                      "Residual statistics over every point (exact), at most 2000 evenly strided points (subsample) "
+                      "or none (skip)")
+      ->capture_default_str();
   command->add_option("--format", options->format, "Input format override (see `quadrix info --help`)")
       ->capture_default_str();
   command->callback([options] {
     const FitTypeHint hint = fit_type_hint_from_name(options->type);
-    const auto fitter = make_quadric_fitter(options->fitter);
+    FitEvaluationOptions evaluation;
+    evaluation.residuals = residual_evaluation_from_name(options->residuals);
+    const auto fitter = make_quadric_fitter(options->fitter, evaluation);
     CloudReadOptions read_options;
     read_options.format = cloud_format_from_name(options->format);
     const PointCloud cloud = read_point_cloud(options->input, read_options);
