@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <new>
 #include <unordered_map>
 
 namespace quadrix {
@@ -145,7 +146,9 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
   struct DetectedShape {
     ElementClass element_class;
     QuadricType type;
-    Eigen::Vector3d normal;  // planes only
+    Eigen::Vector3d normal;                              // planes: normal; cylinders, cones: axis (unit)
+    Eigen::Vector3d point = Eigen::Vector3d::Zero();     // planes: foot of the origin; cylinders: axis point; spheres: centre; cones: apex
+    double size = 0.0;                                   // cylinders, spheres: radius; cones: half-angle (radians)
   };
   std::vector<DetectedShape> shapes;
   if (input.size() >= static_cast<std::size_t>(std::max(3, shape_options.minimum_points))) {
@@ -163,26 +166,88 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
     parameters.epsilon = shape_options.epsilon;
     parameters.cluster_epsilon = shape_options.cluster_epsilon;
     parameters.normal_threshold = shape_options.normal_threshold;
-    ransac.preprocess();
-    ransac.detect(parameters);
+    try {
+      ransac.preprocess();
+      ransac.detect(parameters);
+    } catch (const std::bad_alloc&) {
+      result.status = ExtractionStatus::NoElements;
+      result.message = "Efficient RANSAC ran out of memory on " + std::to_string(input.size()) +
+                       " simplified points (raise simplification_voxel or cluster_epsilon)";
+      result.timings_ms["shape_detection"] = detail::elapsed_ms(stage);
+      return result;
+    }
     for (const auto& shape : ransac.shapes()) {
       DetectedShape detected{ElementClass::Object, QuadricType::Invalid, Eigen::Vector3d::Zero()};
+      const auto vector = [](const Vector3& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); };
+      const auto point = [](const Point3& p) { return Eigen::Vector3d(p.x(), p.y(), p.z()); };
       if (const auto* plane = dynamic_cast<const RansacPlane*>(shape.get())) {
-        const Vector3 n = plane->plane_normal();
-        detected = {ElementClass::Plane, QuadricType::Plane, Eigen::Vector3d(n.x(), n.y(), n.z()).normalized()};
-      } else if (dynamic_cast<const RansacCylinder*>(shape.get()) != nullptr) {
-        detected = {ElementClass::Cylinder, QuadricType::CircularCylinder, Eigen::Vector3d::Zero()};
-      } else if (dynamic_cast<const RansacSphere*>(shape.get()) != nullptr) {
-        detected = {ElementClass::Sphere, QuadricType::Sphere, Eigen::Vector3d::Zero()};
-      } else if (dynamic_cast<const RansacCone*>(shape.get()) != nullptr) {
-        detected = {ElementClass::Cone, QuadricType::CircularCone, Eigen::Vector3d::Zero()};
+        const Eigen::Vector3d n = vector(plane->plane_normal());
+        // CGAL's plane: n . x + d = 0 with n possibly not unit.
+        detected = {ElementClass::Plane, QuadricType::Plane, n.normalized(), -plane->d() / n.squaredNorm() * n, 0.0};
+      } else if (const auto* cylinder = dynamic_cast<const RansacCylinder*>(shape.get())) {
+        const auto axis = cylinder->axis();
+        detected = {ElementClass::Cylinder, QuadricType::CircularCylinder, vector(axis.to_vector()).normalized(),
+                    point(axis.point(0)), cylinder->radius()};
+      } else if (const auto* sphere = dynamic_cast<const RansacSphere*>(shape.get())) {
+        detected = {ElementClass::Sphere, QuadricType::Sphere, Eigen::Vector3d::Zero(), point(sphere->center()),
+                    sphere->radius()};
+      } else if (const auto* cone = dynamic_cast<const RansacCone*>(shape.get())) {
+        detected = {ElementClass::Cone, QuadricType::CircularCone, vector(cone->axis()).normalized(), point(cone->apex()),
+                    cone->angle()};
       }  // tori stay Object (not quadrics; fitted as ellipsoids)
+      // A curved shape whose points are flat within epsilon is a plane: Efficient RANSAC otherwise
+      // returns strips of a large floor as cylinders (or cones) of huge radius.
+      if (detected.type != QuadricType::Plane && detected.element_class != ElementClass::Object) {
+        detail::Moments moments;
+        for (const std::size_t i : shape->indices_of_assigned_points())
+          moments.add(Eigen::Vector3d(input[i].first.x(), input[i].first.y(), input[i].first.z()));
+        const detail::Principal axes = detail::principal_axes(moments.covariance());
+        if (std::sqrt(axes.values(0)) <= shape_options.epsilon)
+          detected = {ElementClass::Plane, QuadricType::Plane, axes.vectors.col(0), moments.mean(), 0.0};
+      }
       const int id = static_cast<int>(shapes.size());
       shapes.push_back(detected);
       for (const std::size_t i : shape->indices_of_assigned_points()) shape_of_representative[i] = id;
     }
   }
   result.timings_ms["shape_detection"] = detail::elapsed_ms(stage);
+
+  // Efficient RANSAC keeps the largest connected piece of each candidate, so one surface cut by
+  // occlusion shadows (a plaza behind columns) returns as several shapes with equal parameters:
+  // those are merged into the first (largest) of them.
+  if (shape_options.merge_equal_shapes && shapes.size() > 1) {
+    const double cos_angle = std::cos(shape_options.merge_angle_deg * 3.14159265358979323846 / 180.0);
+    const double distance = shape_options.merge_distance;
+    const auto line_distance = [](const Eigen::Vector3d& point, const Eigen::Vector3d& on_line, const Eigen::Vector3d& axis) {
+      const Eigen::Vector3d d = point - on_line;
+      return (d - d.dot(axis) * axis).norm();
+    };
+    const auto equal = [&](const DetectedShape& a, const DetectedShape& b) {
+      if (a.type != b.type || a.element_class != b.element_class) return false;
+      const bool parallel = std::abs(a.normal.dot(b.normal)) >= cos_angle;
+      const bool same_size = std::abs(a.size - b.size) <= shape_options.merge_radius_fraction * std::max(a.size, b.size);
+      switch (a.type) {
+        case QuadricType::Plane: return parallel && std::abs(a.normal.dot(b.point - a.point)) <= distance;
+        case QuadricType::CircularCylinder: return parallel && same_size && line_distance(b.point, a.point, a.normal) <= distance;
+        case QuadricType::Sphere: return same_size && (a.point - b.point).norm() <= distance;
+        case QuadricType::CircularCone:
+          return a.normal.dot(b.normal) >= cos_angle && (a.point - b.point).norm() <= distance &&
+                 std::abs(a.size - b.size) <= shape_options.merge_angle_deg * 3.14159265358979323846 / 180.0;
+        default: return false;
+      }
+    };
+    std::vector<int> merged_into(shapes.size());
+    for (std::size_t id = 0; id < shapes.size(); ++id) {
+      merged_into[id] = static_cast<int>(id);
+      for (std::size_t earlier = 0; earlier < id; ++earlier)
+        if (merged_into[earlier] == static_cast<int>(earlier) && equal(shapes[earlier], shapes[id])) {
+          merged_into[id] = static_cast<int>(earlier);
+          break;
+        }
+    }
+    for (int& id : shape_of_representative)
+      if (id >= 0) id = merged_into[static_cast<std::size_t>(id)];
+  }
 
   std::vector<Element> elements(shapes.size());
   for (std::size_t id = 0; id < shapes.size(); ++id) {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <queue>
+#include <random>
 #include <unordered_map>
 
 namespace quadrix {
@@ -22,14 +23,66 @@ struct Voxel {
   int region = -1;                       // region id while growing
 };
 
-// Width (second statistical scale) and area proxy (product of the two largest) of a plane.
-bool plane_is_large_enough(const detail::Moments& moments, std::size_t voxels, const PlaneOptions& options) {
+}  // namespace
+
+bool detail::plane_is_large_enough(const detail::Moments& moments, std::size_t voxels, const PlaneOptions& options) {
   if (moments.count < options.minimum_plane_points || static_cast<int>(voxels) < options.minimum_plane_voxels) return false;
   const detail::Principal axes = detail::principal_axes(moments.covariance());
   const double length = kStatisticalScaleFactor * std::sqrt(axes.values(2));
   const double width = kStatisticalScaleFactor * std::sqrt(axes.values(1));
   return width >= options.minimum_plane_width && length * width >= options.minimum_plane_area;
 }
+
+std::vector<std::uint32_t> detail::dominant_cluster_plane(const Eigen::Matrix3Xd& points,
+                                                         const std::vector<std::uint32_t>& cluster,
+                                                         const PlaneOptions& options, double minimum_fraction) {
+  const std::size_t count = cluster.size();
+  if (count < 3 || static_cast<int>(count) < options.minimum_plane_points) return {};
+  // RANSAC over point triples (deterministic: the seed mixes in the cluster's first index), then
+  // the inliers of the PCA plane of the best hypothesis' inliers.
+  std::mt19937_64 engine(0x5DEECE66Dull ^ (0x9E3779B97F4A7C15ull * (cluster.front() + 1)));
+  std::uniform_int_distribution<std::size_t> pick(0, count - 1);
+  const auto inliers_of = [&](const Eigen::Vector3d& normal, const Eigen::Vector3d& on_plane) {
+    std::size_t inliers = 0;
+    for (const std::uint32_t index : cluster) inliers += std::abs(normal.dot(points.col(index) - on_plane)) <= options.merge_distance;
+    return inliers;
+  };
+  Eigen::Vector3d best_normal = Eigen::Vector3d::UnitZ(), best_point = points.col(cluster.front());
+  std::size_t best = 0;
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    const Eigen::Vector3d a = points.col(cluster[pick(engine)]), b = points.col(cluster[pick(engine)]),
+                          c = points.col(cluster[pick(engine)]);
+    const Eigen::Vector3d normal = (b - a).cross(c - a);
+    if (!(normal.norm() > 1e-9)) continue;
+    const std::size_t inliers = inliers_of(normal.normalized(), a);
+    if (inliers > best) {
+      best = inliers;
+      best_normal = normal.normalized();
+      best_point = a;
+    }
+  }
+  if (static_cast<double>(best) < minimum_fraction * static_cast<double>(count)) return {};
+  detail::Moments moments;
+  for (const std::uint32_t index : cluster)
+    if (std::abs(best_normal.dot(points.col(index) - best_point)) <= options.merge_distance) moments.add(points.col(index));
+  const detail::Principal axes = detail::principal_axes(moments.covariance());
+  const Eigen::Vector3d normal = axes.vectors.col(0), centre = moments.mean();
+  std::vector<std::uint32_t> plane;
+  detail::Moments plane_moments;
+  for (const std::uint32_t index : cluster)
+    if (std::abs(normal.dot(points.col(index) - centre)) <= options.merge_distance) {
+      plane.push_back(index);
+      plane_moments.add(points.col(index));
+    }
+  const double smallest = std::max(detail::principal_axes(plane_moments.covariance()).values(0), 1e-12);
+  const bool flat = detail::principal_axes(plane_moments.covariance()).values(1) > options.eigenvalue_ratio * smallest;
+  if (static_cast<double>(plane.size()) < minimum_fraction * static_cast<double>(count) || !flat ||
+      !plane_is_large_enough(plane_moments, static_cast<std::size_t>(options.minimum_plane_voxels), options))
+    return {};
+  return plane;
+}
+
+namespace {
 
 std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
                                           const PlaneOptions& options, std::vector<std::uint32_t>& remaining) {
@@ -100,7 +153,7 @@ std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const 
             center = moments.mean();
           }
     }
-    if (!plane_is_large_enough(moments, members.size(), options)) continue;  // voxels go back to clustering
+    if (!detail::plane_is_large_enough(moments, members.size(), options)) continue;  // voxels go back to clustering
     Element plane;
     plane.element_class = ElementClass::Plane;
     for (const int id : members) {
@@ -164,7 +217,7 @@ std::vector<Element> extract_planes(const Eigen::Matrix3Xd& points, const std::v
     detail::Moments moments;
     for (const std::uint32_t index : region) moments.add(points.col(index));
     // A region spanning the minimum voxel count of the voxel method: its width already covers it.
-    if (!plane_is_large_enough(moments, static_cast<std::size_t>(options.minimum_plane_voxels), options)) continue;
+    if (!detail::plane_is_large_enough(moments, static_cast<std::size_t>(options.minimum_plane_voxels), options)) continue;
     Element plane;
     plane.element_class = ElementClass::Plane;
     plane.point_indices = region;

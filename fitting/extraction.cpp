@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 
 namespace quadrix {
 
@@ -55,6 +56,14 @@ ExtractionOptions extraction_preset(const std::string& name) {
     options.static_scan = true;  // CGAL Efficient RANSAC shapes (paper Fig. "quadric modeling of Pantheon")
     options.minimum_range = 0.0;
     options.maximum_range = 0.0;
+    // Scaled for a ~160 m monument of several TLS stations (~6 M points): 0.2 m simplification and
+    // a 0.6 m cluster epsilon keep Efficient RANSAC within memory (its connectivity bitmap covers
+    // each candidate's parameter domain at cluster_epsilon resolution) and time; the tolerances
+    // follow the simplified spacing. Small dense scenes want ShapeDetectionOptions' defaults.
+    options.shapes.simplification_voxel = 0.2;
+    options.shapes.epsilon = 0.05;
+    options.shapes.cluster_epsilon = 0.6;
+    options.shapes.minimum_points = 60;
     return options;
   }
   std::string valid;
@@ -133,11 +142,28 @@ void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::ve
                        std::vector<Element>& objects) {
   std::vector<std::vector<Element>> lines_per_cluster(clusters.size());
   std::vector<std::vector<std::uint32_t>> rest_per_cluster(clusters.size());
+  std::vector<std::vector<std::uint32_t>> plane_per_cluster(clusters.size());
   tbb::parallel_for(std::size_t(0), clusters.size(), [&](std::size_t c) {
     lines_per_cluster[c] = extract_lines(points, clusters[c], options.lines, up, rest_per_cluster[c]);
+    // A cluster that is mostly one wall (voxel planes missed it) gives that wall as a plane.
+    if (lines_per_cluster[c].empty()) {
+      plane_per_cluster[c] = detail::dominant_cluster_plane(points, rest_per_cluster[c], options.planes, 0.65);
+      if (!plane_per_cluster[c].empty()) {
+        std::vector<std::uint32_t> rest;
+        std::set_difference(rest_per_cluster[c].begin(), rest_per_cluster[c].end(), plane_per_cluster[c].begin(),
+                            plane_per_cluster[c].end(), std::back_inserter(rest));
+        rest_per_cluster[c] = std::move(rest);
+      }
+    }
   });
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     for (Element& line : lines_per_cluster[c]) lines.push_back(std::move(line));
+    if (!plane_per_cluster[c].empty()) {
+      Element plane;
+      plane.element_class = ElementClass::Plane;
+      plane.point_indices = std::move(plane_per_cluster[c]);
+      objects.push_back(std::move(plane));
+    }
     if (static_cast<int>(rest_per_cluster[c].size()) >= options.clusters.minimum_points) {
       Element object;
       object.element_class = ElementClass::Object;

@@ -123,6 +123,10 @@ struct ShapeDetectionOptions {
   bool detect_cones = true;            ///< look for cones
   bool detect_tori = false;            ///< look for tori (not quadrics: kept as Object elements, fitted as ellipsoids)
   bool mark_ground = true;             ///< the lowest large plane whose normal is within 10 deg of up becomes the Ground
+  bool merge_equal_shapes = true;      ///< merge shapes of one type with the same parameters (RANSAC returns one connected piece per shape, so a surface cut by occlusion shadows comes back in pieces)
+  double merge_angle_deg = 3.0;        ///< merging: normals / axes within this angle, degrees
+  double merge_distance = 0.15;        ///< merging: plane offsets, axis lines, centres and apexes within this distance, m
+  double merge_radius_fraction = 0.05; ///< merging: radii within this fraction (cones: half-angles within merge_angle_deg)
   std::uint32_t seed = 7;              ///< seed of CGAL's default random generator before detection (deterministic runs)
 };
 

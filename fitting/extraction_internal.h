@@ -76,6 +76,18 @@ inline std::uint64_t voxel_key(std::int64_t x, std::int64_t y, std::int64_t z) {
          (static_cast<std::uint64_t>(z + offset) & mask);
 }
 
+/// Whether a plane's points are big enough to be a plane element: at least minimum_plane_points
+/// points over minimum_plane_voxels voxels, width s_s,2 >= minimum_plane_width and area proxy
+/// s_s,1 s_s,2 >= minimum_plane_area (defined in extract_planes.cpp).
+bool plane_is_large_enough(const Moments& moments, std::size_t voxels, const PlaneOptions& options);
+
+/// The points of a cluster's dominant plane, or nothing: RANSAC + PCA refit with the plane merge
+/// distance, kept when it holds at least `minimum_fraction` of the cluster, passes the voxel
+/// eigenvalue-ratio test and plane_is_large_enough. Catches walls whose voxels all straddle an edge
+/// (recesses, door jambs, facades with their side walls) and so never passed as planar voxels.
+std::vector<std::uint32_t> dominant_cluster_plane(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
+                                                  const PlaneOptions& options, double minimum_fraction);
+
 /// extract_elements on `points` = cloud.positions as doubles (the caller already holds them), so a
 /// modelling run converts the cloud once.
 ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
