@@ -1,6 +1,7 @@
 // `quadrix model INPUT... [--poses P,...] --out model.json [--binary model.qsm] [--mesh model.ply]
 // [--elements elements.ply] [--picture model.png] [--preset P] [--labels FILE] [--fitter NAME]`:
-// the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose) (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling").
+// the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose)
+// (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling").
 #include "experiments/command_registry.h"
 #include "experiments/model_picture.h"
 #include "fitting/scene_modelling.h"
@@ -139,7 +140,9 @@ PointCloud read_merged_clouds(const ModelCommandOptions& options, const CloudRea
     if (all_labelled) merged.labels.insert(merged.labels.end(), cloud.labels.begin(), cloud.labels.end());
     for (const auto& [name, values] : clouds.front().extra_fields) {
       const auto field = cloud.extra_fields.find(name);
-      if (field != cloud.extra_fields.end()) merged.extra_fields[name].insert(merged.extra_fields[name].end(), field->second.begin(), field->second.end());
+      if (field == cloud.extra_fields.end()) continue;
+      std::vector<float>& values_out = merged.extra_fields[name];
+      values_out.insert(values_out.end(), field->second.begin(), field->second.end());
     }
   }
   for (auto it = merged.extra_fields.begin(); it != merged.extra_fields.end();)

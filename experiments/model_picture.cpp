@@ -130,8 +130,11 @@ RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options
   return image;
 }
 
-void write_mesh_picture(const std::string& path, const TriangleMesh& mesh, const MeshPictureOptions& options) {
-  const RgbImage image = render_mesh(mesh, options);
+void write_rgb_png(const std::string& path, const RgbImage& image) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 3)
+    throw file_error(path, "image of " + std::to_string(image.width) + " x " + std::to_string(image.height) + " pixels has " +
+                               std::to_string(image.pixels.size()) + " bytes (expected width x height x 3)");
   std::vector<std::uint8_t> png;
   const auto append = [](void* context, void* data, int size) {
     auto* bytes = static_cast<std::vector<std::uint8_t>*>(context);
@@ -142,6 +145,10 @@ void write_mesh_picture(const std::string& path, const TriangleMesh& mesh, const
   write_file_atomically(path, [&png](std::ostream& out) {
     out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
   });
+}
+
+void write_mesh_picture(const std::string& path, const TriangleMesh& mesh, const MeshPictureOptions& options) {
+  write_rgb_png(path, render_mesh(mesh, options));
 }
 
 }  // namespace quadrix

@@ -38,7 +38,11 @@ struct RgbImage {
 /// out of range (naming the option).
 RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options = {});
 
-/// render_mesh, then writes the image as PNG atomically (temporary file, then rename).
+/// Writes an RGB image as PNG (stb) atomically (temporary file, then rename); throws quadrix::Error
+/// naming the path when the image is inconsistent or encoding fails. Any PNG writer can share it.
+void write_rgb_png(const std::string& path, const RgbImage& image);
+
+/// render_mesh, then write_rgb_png.
 void write_mesh_picture(const std::string& path, const TriangleMesh& mesh, const MeshPictureOptions& options = {});
 
 }  // namespace quadrix
