@@ -156,20 +156,21 @@ struct RunContext {
   SharedCache<PointCloud> clouds;
   SharedCache<CachedModel> models;
   std::mutex preset_mutex;
-  std::map<std::string, std::string> presets;  // cloud path -> resolved preset
+  std::map<std::string, RegistrationOptions> resolved;  // cloud path -> its preset's options (auto: measured, with up axis and crop)
 
-  std::string preset_of(const std::string& path, const PointCloud& cloud) {
-    if (options->preset != "auto") return options->preset;
+  // The options `quadrix register` would use for this cloud on either side (resolve_registration_options).
+  RegistrationOptions options_of(const std::string& path, const PointCloud& cloud) {
+    if (options->preset != "auto") return load_registration_preset(options->preset);
     std::lock_guard<std::mutex> lock(preset_mutex);
-    auto found = presets.find(path);
-    if (found == presets.end()) found = presets.emplace(path, guess_sensor_preset(cloud).preset).first;
+    auto found = resolved.find(path);
+    if (found == resolved.end()) found = resolved.emplace(path, resolve_registration_options("auto", cloud, "auto", cloud)).first;
     return found->second;
   }
 
   // RegistrationOptions as `quadrix register` builds them, then the ablation.
-  RegistrationOptions options_for(const std::string& source_preset, const std::string& target_preset) const {
-    RegistrationOptions registration = load_registration_preset(source_preset);
-    registration.target_extraction = load_registration_preset(target_preset).target_extraction;
+  RegistrationOptions options_for(const RegistrationOptions& source_side, const RegistrationOptions& target_side) const {
+    RegistrationOptions registration = source_side;
+    registration.target_extraction = target_side.target_extraction;
     if (!options->config.empty()) apply_registration_config(options->config, registration);
     if (!options->refiner.empty()) registration.estimation.refiner = options->refiner;
     apply_ablation(options->ablation, registration);
@@ -182,9 +183,8 @@ std::string model_key(const std::string& path, const std::string& side) { return
 BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input, const PointCloud& original_source,
                               BenchRow& row) {
   const BenchPair& pair = *input.pair;
-  const std::string source_preset = context.preset_of(pair.source, original_source);
-  const std::string target_preset = context.preset_of(pair.target, *input.target);
-  const RegistrationOptions registration = context.options_for(source_preset, target_preset);
+  const RegistrationOptions registration =
+      context.options_for(context.options_of(pair.source, original_source), context.options_of(pair.target, *input.target));
   const bool perturbed = context.options->yaw_range_degrees > 0.0 || context.options->translation_range > 0.0;
   const auto build = [](const PointCloud& cloud, const ExtractionOptions& extraction, const ModellingOptions& modelling) {
     CachedModel cached;

@@ -120,7 +120,10 @@ ModellingResult model_elements(const Eigen::Matrix3Xd& points, const ExtractionR
     throw Error("modelling options: K_e, delta_a and K_a must be non-negative");
   if (!(options.augmentation_voxel > 0.0)) throw Error("modelling option v_a (augmentation_voxel) must be positive");
   if (options.maximum_fit_points < 0) throw Error("modelling option maximum_fit_points must be non-negative (0: no cap)");
-  const std::unique_ptr<QuadricFitter> fitter = make_quadric_fitter(options.fitter);
+  // Modelling reads only the fitted quadric and type, never the residual statistics, so the fitter
+  // skips them (the same quadric either way; exact residuals were most of each fit's cost).
+  const std::unique_ptr<QuadricFitter> fitter =
+      make_quadric_fitter(options.fitter, FitEvaluationOptions{ResidualEvaluation::Skip, 2000});
   ModellingResult result;
   result.extraction = extraction;
   SceneModel& model = result.model;
