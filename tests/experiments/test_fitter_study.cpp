@@ -102,9 +102,12 @@ TEST(FitterStudy, MeasuresExactFitsAsExactAndIsReproducible) {
       EXPECT_LT(row.centre_error, 1e-6);
       EXPECT_LT(row.surface_rms, 1e-6);
     }
-    if (row.fitter == "statistical" && row.mode == "auto") EXPECT_EQ(row.fitted_type, QuadricType::Ellipsoid);
-    if (row.fitter == "statistical" && row.mode == "hint" && row.true_type == QuadricType::Sphere)
+    if (row.fitter == "statistical" && row.mode == "auto") {
+      EXPECT_EQ(row.fitted_type, QuadricType::Ellipsoid);
+    }
+    if (row.fitter == "statistical" && row.mode == "hint" && row.true_type == QuadricType::Sphere) {
       EXPECT_GT(row.surface_rms, 1e-3);  // k_s * sigma is not the radius of a full sphere
+    }
   }
   EXPECT_EQ(exact_rows, 4);
   const FitterStudyResult second = run_fitter_study(options);
@@ -112,7 +115,9 @@ TEST(FitterStudy, MeasuresExactFitsAsExactAndIsReproducible) {
   for (std::size_t i = 0; i < first.rows.size(); ++i) {
     EXPECT_EQ(first.rows[i].fitter, second.rows[i].fitter);
     EXPECT_EQ(first.rows[i].status, second.rows[i].status);
-    if (std::isfinite(first.rows[i].surface_rms)) EXPECT_DOUBLE_EQ(first.rows[i].surface_rms, second.rows[i].surface_rms);
+    if (std::isfinite(first.rows[i].surface_rms)) {
+      EXPECT_DOUBLE_EQ(first.rows[i].surface_rms, second.rows[i].surface_rms);
+    }
   }
 }
 

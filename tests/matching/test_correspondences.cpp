@@ -137,7 +137,9 @@ TEST(Correspondences, TopKLimitsAndMutualAgreement) {
   // Ellipsoids and trunks have distinct scales, so their true pairs are mutual best matches.
   for (const auto& [source, target] : pair.truth) {
     const QuadricType type = pair.source.types[source];
-    if (type == QuadricType::Ellipsoid || type == QuadricType::EllipticCylinder) EXPECT_TRUE(contains(set, source, target));
+    if (type == QuadricType::Ellipsoid || type == QuadricType::EllipticCylinder) {
+      EXPECT_TRUE(contains(set, source, target));
+    }
   }
 }
 
