@@ -4,6 +4,8 @@
 #include "geometry/error.h"
 #include "geometry/io.h"
 
+// The one translation unit holding stb's PNG writer (bev.png and model pictures both use write_rgb_png).
+#define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
 
 #include <Eigen/Geometry>

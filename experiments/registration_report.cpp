@@ -1,13 +1,12 @@
 // report.json, merged.ply and bev.png of a registration (see registration_report.h).
 #include "experiments/registration_report.h"
 
+#include "experiments/model_picture.h"
+
 #include "geometry/error.h"
 #include "geometry/io.h"
 
 #include <nlohmann/json.hpp>
-
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#include <stb/stb_image_write.h>
 
 #include <algorithm>
 #include <array>
@@ -201,16 +200,7 @@ void write_birds_eye_png(const std::string& path, const PointCloud& source, cons
   const int glyph_scale = std::max(2, canvas.size / 256);
   canvas.text(margin, base - 4 * thickness - 7 * glyph_scale, std::to_string(static_cast<long long>(std::lround(bar))) + "m",
               glyph_scale, {0, 0, 0});
-  std::vector<std::uint8_t> png;
-  const auto append = [](void* context, void* data, int size) {
-    auto* bytes = static_cast<std::vector<std::uint8_t>*>(context);
-    bytes->insert(bytes->end(), static_cast<std::uint8_t*>(data), static_cast<std::uint8_t*>(data) + size);
-  };
-  if (stbi_write_png_to_func(append, &png, canvas.size, canvas.size, 3, canvas.pixels.data(), canvas.size * 3) == 0)
-    throw file_error(path, "PNG encoding failed");
-  write_file_atomically(path, [&png](std::ostream& out) {
-    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-  });
+  write_rgb_png(path, RgbImage{canvas.size, canvas.size, std::move(canvas.pixels)});
 }
 
 }  // namespace quadrix
