@@ -33,6 +33,27 @@ std::size_t count_quadrics(const SceneModel& model) { return model.augmented_beg
 
 }  // namespace
 
+FactorBuildOptions estimation_factor_options(const SceneModel& source, const SceneModel& target,
+                                             const EstimationOptions& options) {
+  FactorBuildOptions factor_options;
+  factor_options.augment_non_central = options.augment_non_central;
+  factor_options.manhattan_tolerance_degrees = options.manhattan_tolerance_degrees;
+  factor_options.structure_labels = structure_labels();
+  factor_options.use_rotation_error = options.use_rotation_error;
+  factor_options.use_translation_error = options.use_translation_error;
+  if (source.has_ground && target.has_ground) {
+    // f_pp against the estimated ground normal of each cloud (not the z axis: REFERENCE.md pitfall).
+    factor_options.source_ground_normal = source.ground_normal;
+    factor_options.target_ground_normal = target.ground_normal;
+    if (options.use_ground_constraint) {
+      factor_options.source_ground = GroundPlane{source.ground_normal, source.ground_offset};
+      factor_options.target_ground = GroundPlane{target.ground_normal, target.ground_offset};
+      factor_options.ground_weight = options.ground_weight;
+    }
+  }
+  return factor_options;
+}
+
 const char* registration_status_name(RegistrationStatus status) {
   switch (status) {
     case RegistrationStatus::Ok: return "ok";
@@ -117,26 +138,11 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
   stage = Clock::now();
   const std::vector<QuadricDecomposition> source_shapes = decompose_records(source.records);
   const std::vector<QuadricDecomposition> target_shapes = decompose_records(target.records);
-  FactorBuildOptions factor_options;
-  factor_options.augment_non_central = options.estimation.augment_non_central;
-  factor_options.manhattan_tolerance_degrees = options.estimation.manhattan_tolerance_degrees;
-  factor_options.structure_labels = structure_labels();
-  factor_options.use_rotation_error = options.estimation.use_rotation_error;
-  factor_options.use_translation_error = options.estimation.use_translation_error;
+  const FactorBuildOptions factor_options = estimation_factor_options(source, target, options.estimation);
   RefinerOptions refiner_options = options.estimation.refinement;
   // Without e_R or e_t some directions may be unconstrained by design: optimise what is left and keep
   // the SVD start along the rest (the paper's ablation rows), instead of refusing as degenerate.
   if (!options.estimation.use_rotation_error || !options.estimation.use_translation_error) refiner_options.check_degeneracy = false;
-  if (source.has_ground && target.has_ground) {
-    // f_pp against the estimated ground normal of each cloud (not the z axis: REFERENCE.md pitfall).
-    factor_options.source_ground_normal = source.ground_normal;
-    factor_options.target_ground_normal = target.ground_normal;
-    if (options.estimation.use_ground_constraint) {
-      factor_options.source_ground = GroundPlane{source.ground_normal, source.ground_offset};
-      factor_options.target_ground = GroundPlane{target.ground_normal, target.ground_offset};
-      factor_options.ground_weight = options.estimation.ground_weight;
-    }
-  }
   const std::unique_ptr<Refiner> refiner = make_refiner(options.estimation.refiner);
   for (std::size_t level = 0; level < cliques.levels.size(); ++level) {
     const std::vector<int>& clique = cliques.levels[level].clique;

@@ -125,6 +125,12 @@ struct RegistrationResult {
   SceneModel target_model;                                      ///< R_y
 };
 
+/// The factor options of candidate estimation between two models (Algorithm 1): Augment(), f_pp over
+/// the key-structure labels against each cloud's estimated ground normal, the ground factor when both
+/// clouds have a ground, and the e_R / e_t switches. register_models and the studies share it.
+FactorBuildOptions estimation_factor_options(const SceneModel& source, const SceneModel& target,
+                                             const EstimationOptions& options);
+
 /// Registers two already-modelled scenes (everything after modelling: correspondences, graphs,
 /// cliques, Algorithm 1). `counts` source/target points and elements are left 0; timings have no
 /// modelling entries. The models are copied into the result.

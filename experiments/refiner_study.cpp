@@ -236,12 +236,6 @@ std::vector<PairRow> read_pairs_table(const std::string& path) {
 
 /// Labels f_pp applies to, as in register_models (estimation/registration.cpp): planes, lines,
 /// trunks, cylinders and cones; the ground is the reference, central quadrics have no axis test.
-std::vector<std::uint32_t> pipeline_structure_labels() {
-  return {static_cast<std::uint32_t>(ElementClass::Plane), static_cast<std::uint32_t>(ElementClass::Line),
-          static_cast<std::uint32_t>(ElementClass::Trunk), static_cast<std::uint32_t>(ElementClass::Cylinder),
-          static_cast<std::uint32_t>(ElementClass::Cone)};
-}
-
 /// The real problems of one loop-closure pair: its ground-truth inliers and the pipeline's clique.
 std::vector<Problem> real_problems(const PairRow& pair, std::size_t pair_index, const RegistrationOptions& registration,
                                    std::map<std::string, SceneModel>& models, const RefinerStudyOptions& options,
@@ -291,19 +285,7 @@ std::vector<Problem> real_problems(const PairRow& pair, std::size_t pair_index, 
                   registered.message + ")";
   }
 
-  FactorBuildOptions factor_options;
-  factor_options.augment_non_central = registration.estimation.augment_non_central;
-  factor_options.manhattan_tolerance_degrees = registration.estimation.manhattan_tolerance_degrees;
-  factor_options.structure_labels = pipeline_structure_labels();
-  if (source.has_ground && target.has_ground) {
-    factor_options.source_ground_normal = source.ground_normal;
-    factor_options.target_ground_normal = target.ground_normal;
-    if (registration.estimation.use_ground_constraint) {
-      factor_options.source_ground = GroundPlane{source.ground_normal, source.ground_offset};
-      factor_options.target_ground = GroundPlane{target.ground_normal, target.ground_offset};
-      factor_options.ground_weight = registration.estimation.ground_weight;
-    }
-  }
+  const FactorBuildOptions factor_options = estimation_factor_options(source, target, registration.estimation);
   const std::vector<QuadricDecomposition> source_shapes = decompose_records(source.records);
   const std::vector<QuadricDecomposition> target_shapes = decompose_records(target.records);
 
