@@ -105,7 +105,7 @@ TEST_F(TinyKitti, LoopClosureRuleGivesExactlyThePairsOfThePaperEquation) {
   EXPECT_TRUE(generate_loop_closure_pairs(sequence, bins, strict).empty());
 }
 
-TEST_F(TinyKitti, OdometryRuleTakesTheFrameWhoseDistanceIsClosestToDOdo) {
+TEST_F(TinyKitti, OdometryRuleTakesTheFrameWhoseDistanceIsClosestToTheOdometryDistance) {
   const KittiSequence sequence = load_kitti_sequence(root_.string(), "00", calibration_);
   const std::vector<double> distances = parse_odometry_distances("1..3");
   ASSERT_EQ(distances, (std::vector<double>{1.0, 2.0, 3.0}));
