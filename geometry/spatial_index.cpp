@@ -29,17 +29,6 @@ struct ColumnCloud {
 using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, ColumnCloud>, ColumnCloud, 3,
                                                    std::size_t>;
 
-// Converts squared distances to distances and orders ties by index, so results are deterministic.
-std::vector<Neighbor> sorted_neighbors(const std::vector<std::pair<std::size_t, double>>& found) {
-  std::vector<Neighbor> neighbors;
-  neighbors.reserve(found.size());
-  for (const auto& [index, squared] : found) neighbors.push_back({index, std::sqrt(squared)});
-  std::sort(neighbors.begin(), neighbors.end(), [](const Neighbor& a, const Neighbor& b) {
-    return a.distance < b.distance || (a.distance == b.distance && a.index < b.index);
-  });
-  return neighbors;
-}
-
 // nanoflann result set keeping the nearest point not excluded, ties by the lowest index. Its
 // worst distance sits one ulp above the best so points at exactly the best distance are still
 // offered (nanoflann only offers points strictly nearer than the worst distance).
@@ -95,18 +84,6 @@ std::size_t PointIndex::size() const { return tree_ ? tree_->cloud.kdtree_get_po
 
 const Eigen::Matrix3Xd& PointIndex::points() const { return tree_->cloud.points; }
 
-std::vector<Neighbor> PointIndex::nearest(const Eigen::Vector3d& query, std::size_t k) const {
-  const std::size_t count = std::min(k, size());
-  if (count == 0) return {};
-  std::vector<std::size_t> indices(count);
-  std::vector<double> squared(count);
-  const std::size_t found = tree_->tree.knnSearch(query.data(), count, indices.data(), squared.data());
-  std::vector<std::pair<std::size_t, double>> pairs;
-  pairs.reserve(found);
-  for (std::size_t n = 0; n < found; ++n) pairs.emplace_back(indices[n], squared[n]);
-  return sorted_neighbors(pairs);
-}
-
 std::optional<Neighbor> PointIndex::nearest_not_excluded(const Eigen::Vector3d& query, const std::vector<bool>& excluded) const {
   if (excluded.size() != size())
     throw Error("PointIndex::nearest_not_excluded: " + std::to_string(excluded.size()) + " exclusion flags for " +
@@ -115,15 +92,6 @@ std::optional<Neighbor> PointIndex::nearest_not_excluded(const Eigen::Vector3d& 
   NearestNotExcluded result(excluded);
   tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
   return result.result();
-}
-
-std::vector<Neighbor> PointIndex::within_radius(const Eigen::Vector3d& query, double radius) const {
-  if (size() == 0 || !(radius >= 0.0)) return {};
-  std::vector<std::pair<std::size_t, double>> found;
-  // nanoflann's radius test is strict on the squared distance; nudge it so the boundary is inclusive.
-  const double squared_radius = std::nextafter(radius * radius, std::numeric_limits<double>::infinity());
-  tree_->tree.radiusSearch(query.data(), squared_radius, found, nanoflann::SearchParams(32, 0.0F, false));
-  return sorted_neighbors(found);
 }
 
 }  // namespace quadrix

@@ -32,14 +32,10 @@ class PointIndex {
   std::size_t size() const;
   /// The indexed points, one column each.
   const Eigen::Matrix3Xd& points() const;
-  /// The min(k, size()) nearest points to `query`, by increasing distance (ties by index).
-  std::vector<Neighbor> nearest(const Eigen::Vector3d& query, std::size_t k) const;
   /// The nearest point whose `excluded[index]` is false, ties by the lowest index; nullopt when
   /// every point is excluded. `excluded` has size() entries (else quadrix::Error). Used for greedy
   /// one-to-one assignment: excluded points cost one flag test when the search reaches them.
   std::optional<Neighbor> nearest_not_excluded(const Eigen::Vector3d& query, const std::vector<bool>& excluded) const;
-  /// Every point within `radius` of `query` (inclusive), by increasing distance (ties by index).
-  std::vector<Neighbor> within_radius(const Eigen::Vector3d& query, double radius) const;
 
  private:
   struct Tree;
