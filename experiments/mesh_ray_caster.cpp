@@ -53,7 +53,6 @@ MeshRayCaster::MeshRayCaster(const Scene& scene, int resolution) : tree_(std::ma
     }
   }
   tree_->tree.emplace(tree_->triangles.cbegin(), tree_->triangles.cend());
-  tree_->tree->accelerate_distance_queries();
 }
 
 MeshRayCaster::~MeshRayCaster() = default;
