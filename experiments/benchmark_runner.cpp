@@ -156,14 +156,14 @@ struct RunContext {
   SharedCache<PointCloud> clouds;
   SharedCache<CachedModel> models;
   std::mutex preset_mutex;
-  std::map<std::string, RegistrationOptions> resolved;  // cloud path -> its preset's options (auto: measured, with up axis and crop)
+  std::map<std::string, RegistrationOptions> resolved;  // cloud path -> its options, resolved once (auto: measured, with up axis and crop)
 
   // The options `quadrix register` would use for this cloud on either side (resolve_registration_options).
   RegistrationOptions options_of(const std::string& path, const PointCloud& cloud) {
-    if (options->preset != "auto") return load_registration_preset(options->preset);
     std::lock_guard<std::mutex> lock(preset_mutex);
     auto found = resolved.find(path);
-    if (found == resolved.end()) found = resolved.emplace(path, resolve_registration_options("auto", cloud, "auto", cloud)).first;
+    if (found == resolved.end())
+      found = resolved.emplace(path, resolve_registration_options(options->preset, cloud, options->preset, cloud)).first;
     return found->second;
   }
 

@@ -123,7 +123,7 @@ ModellingResult model_elements(const Eigen::Matrix3Xd& points, const ExtractionR
   // Modelling reads only the fitted quadric and type, never the residual statistics, so the fitter
   // skips them (the same quadric either way; exact residuals were most of each fit's cost).
   const std::unique_ptr<QuadricFitter> fitter =
-      make_quadric_fitter(options.fitter, FitEvaluationOptions{ResidualEvaluation::Skip, 2000});
+      make_quadric_fitter(options.fitter, FitEvaluationOptions{ResidualEvaluation::Skip});
   ModellingResult result;
   result.extraction = extraction;
   SceneModel& model = result.model;
