@@ -19,7 +19,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <new>
+#include <tuple>
 #include <unordered_map>
 
 namespace quadrix {
@@ -33,11 +35,47 @@ using PointWithNormalVector = std::vector<PointWithNormal>;
 using PointMap = CGAL::First_of_pair_property_map<PointWithNormal>;
 using NormalMap = CGAL::Second_of_pair_property_map<PointWithNormal>;
 
-using RansacTraits = CGAL::Shape_detection::Efficient_RANSAC_traits<Kernel, PointWithNormalVector, PointMap, NormalMap>;
+// Efficient RANSAC reorders its input (it moves random subsets to the end for its octrees), so each
+// point carries the index of the simplified point it came from.
+using RansacPoint = std::tuple<Point3, Vector3, std::uint32_t>;
+using RansacPointVector = std::vector<RansacPoint>;
+using RansacPointMap = CGAL::Nth_of_tuple_property_map<0, RansacPoint>;
+
+// CGAL 5.5's Sphere::create_shape accepts three sampled points only when their normals point away
+// from the proposed centre (planes, cylinders and cones compare |cos|), so a dome whose normals face
+// a station inside it, or a ball whose normals face the wrong station, is never proposed. While this
+// flag is set the normal map hands out reversed normals, so a sphere proposal can try both sides.
+thread_local bool reverse_normals_for_sphere_proposal = false;
+
+/// Normal of a RansacPoint as a readable property map (reversed while a sphere proposal asks).
+struct RansacNormalMap {
+  using key_type = RansacPoint;
+  using value_type = Vector3;
+  using reference = Vector3;
+  using category = boost::readable_property_map_tag;
+  friend Vector3 get(const RansacNormalMap&, const RansacPoint& item) {
+    return reverse_normals_for_sphere_proposal ? -std::get<1>(item) : std::get<1>(item);
+  }
+};
+
+using RansacTraits = CGAL::Shape_detection::Efficient_RANSAC_traits<Kernel, RansacPointVector, RansacPointMap, RansacNormalMap>;
 using EfficientRansac = CGAL::Shape_detection::Efficient_RANSAC<RansacTraits>;
 using RansacPlane = CGAL::Shape_detection::Plane<RansacTraits>;
 using RansacCylinder = CGAL::Shape_detection::Cylinder<RansacTraits>;
 using RansacSphere = CGAL::Shape_detection::Sphere<RansacTraits>;
+
+/// CGAL's sphere with orientation-free proposals: when the sampled normals point toward the centre
+/// (a surface scanned from inside), the proposal is repeated with the normals reversed.
+class TwoSidedSphere : public RansacSphere {
+ protected:
+  void create_shape(const std::vector<std::size_t>& indices) override {
+    RansacSphere::create_shape(indices);
+    if (this->m_is_valid) return;
+    reverse_normals_for_sphere_proposal = true;
+    RansacSphere::create_shape(indices);
+    reverse_normals_for_sphere_proposal = false;
+  }
+};
 using RansacCone = CGAL::Shape_detection::Cone<RansacTraits>;
 using RansacTorus = CGAL::Shape_detection::Torus<RansacTraits>;
 
@@ -84,6 +122,198 @@ std::vector<std::vector<std::uint32_t>> cgal_region_growing_planes(const Eigen::
 }
 
 }  // namespace detail
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// One Efficient RANSAC shape in Eigen terms with the simplified points it holds.
+struct DetectedShape {
+  ElementClass element_class = ElementClass::Object;  ///< class the element gets
+  QuadricType type = QuadricType::Invalid;            ///< plane, circular cylinder, sphere, circular cone (Invalid: torus)
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();    ///< planes: unit normal; cylinders, cones: unit axis (cones: opening side)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();    ///< planes: a point on it; cylinders: an axis point; spheres: centre; cones: apex
+  double size = 0.0;                                  ///< cylinders, spheres: radius, m; cones: half-angle, radians
+  std::vector<std::uint32_t> members;                 ///< indices into the simplified points
+  Eigen::Vector3d lower = Eigen::Vector3d::Zero();    ///< bounding box of the members
+  Eigen::Vector3d upper = Eigen::Vector3d::Zero();    ///< bounding box of the members
+};
+
+/// Distance from p to the surface of a shape (planes, cylinders, spheres: exact; cones: to the nappe
+/// on the axis side, the CGAL cone's).
+double surface_distance(const DetectedShape& shape, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = p - shape.point;
+  switch (shape.type) {
+    case QuadricType::Plane: return std::abs(shape.axis.dot(d));
+    case QuadricType::CircularCylinder: return std::abs((d - d.dot(shape.axis) * shape.axis).norm() - shape.size);
+    case QuadricType::Sphere: return std::abs(d.norm() - shape.size);
+    case QuadricType::CircularCone: {
+      const double along = d.dot(shape.axis), across = (d - along * shape.axis).norm();
+      return std::abs(across * std::cos(shape.size) - along * std::sin(shape.size));
+    }
+    default: return std::numeric_limits<double>::infinity();
+  }
+}
+
+/// How well a shape explains points: RMS distance and the fraction within epsilon.
+struct Agreement {
+  double rms = std::numeric_limits<double>::infinity();  ///< root mean square surface distance, m
+  double inside_fraction = 0.0;                          ///< fraction of the points within epsilon
+};
+
+Agreement agreement(const DetectedShape& shape, const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members,
+                    double epsilon) {
+  Agreement result;
+  if (members.empty()) return result;
+  double squares = 0.0;
+  std::size_t inside = 0;
+  for (const std::uint32_t i : members) {
+    const double distance = surface_distance(shape, points.col(i));
+    squares += distance * distance;
+    if (distance <= epsilon) ++inside;
+  }
+  result.rms = std::sqrt(squares / static_cast<double>(members.size()));
+  result.inside_fraction = static_cast<double>(inside) / static_cast<double>(members.size());
+  return result;
+}
+
+/// Least-squares plane (PCA) of the members.
+DetectedShape fit_plane(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members) {
+  detail::Moments moments;
+  for (const std::uint32_t i : members) moments.add(points.col(i));
+  DetectedShape plane;
+  plane.element_class = ElementClass::Plane;
+  plane.type = QuadricType::Plane;
+  plane.axis = detail::principal_axes(moments.covariance()).vectors.col(0);
+  plane.point = moments.mean();
+  return plane;
+}
+
+/// Least-squares circular cylinder of the members with a given unit axis: Kasa's algebraic circle
+/// fit in the plane across the axis, then Gauss-Newton on the geometric distance. False when the
+/// points do not define a circle.
+bool fit_cylinder(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members, const Eigen::Vector3d& axis,
+                  DetectedShape& cylinder) {
+  if (members.size() < 3) return false;
+  const Eigen::Vector3d helper = std::abs(axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d u = axis.cross(helper).normalized(), v = axis.cross(u);
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  for (const std::uint32_t i : members) origin += points.col(i);
+  origin /= static_cast<double>(members.size());
+  std::vector<Eigen::Vector2d> planar;
+  planar.reserve(members.size());
+  for (const std::uint32_t i : members) {
+    const Eigen::Vector3d d = points.col(i) - origin;
+    planar.emplace_back(d.dot(u), d.dot(v));
+  }
+  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d right_side = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector2d& q : planar) {
+    const Eigen::Vector3d row(q.x(), q.y(), 1.0);
+    normal_matrix.noalias() += row * row.transpose();
+    right_side += row * q.squaredNorm();
+  }
+  const Eigen::Vector3d solution = normal_matrix.ldlt().solve(right_side);
+  Eigen::Vector2d centre(0.5 * solution.x(), 0.5 * solution.y());
+  double radius_squared = solution.z() + centre.squaredNorm();
+  if (!solution.allFinite() || !(radius_squared > 0.0)) return false;
+  double radius = std::sqrt(radius_squared);
+  for (int iteration = 0; iteration < 10; ++iteration) {  // Gauss-Newton on (|q - c| - r)
+    Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d jtr = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector2d& q : planar) {
+      const Eigen::Vector2d d = q - centre;
+      const double length = d.norm();
+      if (!(length > 1e-12)) continue;
+      const Eigen::Vector3d jacobian(-d.x() / length, -d.y() / length, -1.0);
+      jtj.noalias() += jacobian * jacobian.transpose();
+      jtr += jacobian * (length - radius);
+    }
+    const Eigen::Vector3d step = jtj.ldlt().solve(-jtr);
+    if (!step.allFinite()) return false;
+    centre += step.head<2>();
+    radius += step.z();
+    if (step.norm() < 1e-7) break;
+  }
+  if (!(radius > 0.0) || !std::isfinite(radius)) return false;
+  cylinder.element_class = ElementClass::Cylinder;
+  cylinder.type = QuadricType::CircularCylinder;
+  cylinder.axis = axis;
+  cylinder.point = origin + centre.x() * u + centre.y() * v;
+  cylinder.size = radius;
+  return true;
+}
+
+/// Least-squares sphere of the members: algebraic fit, then Gauss-Newton on the geometric distance.
+bool fit_sphere(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members, DetectedShape& sphere) {
+  if (members.size() < 4) return false;
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  for (const std::uint32_t i : members) origin += points.col(i);
+  origin /= static_cast<double>(members.size());
+  Eigen::Matrix4d normal_matrix = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d right_side = Eigen::Vector4d::Zero();
+  for (const std::uint32_t i : members) {
+    const Eigen::Vector3d d = points.col(i) - origin;
+    const Eigen::Vector4d row(d.x(), d.y(), d.z(), 1.0);
+    normal_matrix.noalias() += row * row.transpose();
+    right_side += row * d.squaredNorm();
+  }
+  const Eigen::Vector4d solution = normal_matrix.ldlt().solve(right_side);
+  Eigen::Vector3d centre = 0.5 * solution.head<3>();
+  double radius_squared = solution.w() + centre.squaredNorm();
+  if (!solution.allFinite() || !(radius_squared > 0.0)) return false;
+  double radius = std::sqrt(radius_squared);
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    Eigen::Matrix4d jtj = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d jtr = Eigen::Vector4d::Zero();
+    for (const std::uint32_t i : members) {
+      const Eigen::Vector3d d = points.col(i) - origin - centre;
+      const double length = d.norm();
+      if (!(length > 1e-12)) continue;
+      const Eigen::Vector4d jacobian(-d.x() / length, -d.y() / length, -d.z() / length, -1.0);
+      jtj.noalias() += jacobian * jacobian.transpose();
+      jtr += jacobian * (length - radius);
+    }
+    const Eigen::Vector4d step = jtj.ldlt().solve(-jtr);
+    if (!step.allFinite()) return false;
+    centre += step.head<3>();
+    radius += step.w();
+    if (step.norm() < 1e-7) break;
+  }
+  if (!(radius > 0.0) || !std::isfinite(radius)) return false;
+  sphere.element_class = ElementClass::Sphere;
+  sphere.type = QuadricType::Sphere;
+  sphere.point = origin + centre;
+  sphere.size = radius;
+  return true;
+}
+
+void update_bounds(const Eigen::Matrix3Xd& points, DetectedShape& shape) {
+  shape.lower = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  shape.upper = -shape.lower;
+  for (const std::uint32_t i : shape.members) {
+    shape.lower = shape.lower.cwiseMin(points.col(i));
+    shape.upper = shape.upper.cwiseMax(points.col(i));
+  }
+}
+
+/// The same shape refitted to `members` (planes, cylinders with the given axis, spheres; cones keep
+/// their parameters). False when the fit fails.
+bool refit(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members, const DetectedShape& shape,
+           DetectedShape& refitted) {
+  refitted = shape;
+  switch (shape.type) {
+    case QuadricType::Plane: refitted = fit_plane(points, members); break;
+    case QuadricType::CircularCylinder: if (!fit_cylinder(points, members, shape.axis, refitted)) return false; break;
+    case QuadricType::Sphere: if (!fit_sphere(points, members, refitted)) return false; break;
+    case QuadricType::CircularCone: break;
+    default: return false;
+  }
+  refitted.members = members;
+  return true;
+}
+
+}  // namespace
 
 ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals,
                                const ExtractionOptions& options) {
@@ -142,22 +372,20 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
   result.timings_ms["normals"] = detail::elapsed_ms(stage);
 
   stage = std::chrono::steady_clock::now();
-  std::vector<int> shape_of_representative(input.size(), -1);
-  struct DetectedShape {
-    ElementClass element_class;
-    QuadricType type;
-    Eigen::Vector3d normal;                              // planes: normal; cylinders, cones: axis (unit)
-    Eigen::Vector3d point = Eigen::Vector3d::Zero();     // planes: foot of the origin; cylinders: axis point; spheres: centre; cones: apex
-    double size = 0.0;                                   // cylinders, spheres: radius; cones: half-angle (radians)
-  };
+  Eigen::Matrix3Xd simplified(3, static_cast<Eigen::Index>(input.size()));
+  for (std::size_t i = 0; i < input.size(); ++i)
+    simplified.col(static_cast<Eigen::Index>(i)) = Eigen::Vector3d(input[i].first.x(), input[i].first.y(), input[i].first.z());
   std::vector<DetectedShape> shapes;
   if (input.size() >= static_cast<std::size_t>(std::max(3, shape_options.minimum_points))) {
     CGAL::get_default_random() = CGAL::Random(shape_options.seed);
+    RansacPointVector ransac_input;
+    ransac_input.reserve(input.size());
+    for (std::uint32_t i = 0; i < input.size(); ++i) ransac_input.emplace_back(input[i].first, input[i].second, i);
     EfficientRansac ransac;
-    ransac.set_input(input, PointMap(), NormalMap());
+    ransac.set_input(ransac_input, RansacPointMap(), RansacNormalMap());
     if (shape_options.detect_planes) ransac.add_shape_factory<RansacPlane>();
     if (shape_options.detect_cylinders) ransac.add_shape_factory<RansacCylinder>();
-    if (shape_options.detect_spheres) ransac.add_shape_factory<RansacSphere>();
+    if (shape_options.detect_spheres) ransac.add_shape_factory<TwoSidedSphere>();
     if (shape_options.detect_cones) ransac.add_shape_factory<RansacCone>();
     if (shape_options.detect_tori) ransac.add_shape_factory<RansacTorus>();
     EfficientRansac::Parameters parameters;
@@ -176,78 +404,148 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
       result.timings_ms["shape_detection"] = detail::elapsed_ms(stage);
       return result;
     }
+    const auto vector = [](const Vector3& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); };
+    const auto point = [](const Point3& p) { return Eigen::Vector3d(p.x(), p.y(), p.z()); };
     for (const auto& shape : ransac.shapes()) {
-      DetectedShape detected{ElementClass::Object, QuadricType::Invalid, Eigen::Vector3d::Zero()};
-      const auto vector = [](const Vector3& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); };
-      const auto point = [](const Point3& p) { return Eigen::Vector3d(p.x(), p.y(), p.z()); };
+      DetectedShape detected;
+      for (const std::size_t i : shape->indices_of_assigned_points()) detected.members.push_back(std::get<2>(ransac_input[i]));
       if (const auto* plane = dynamic_cast<const RansacPlane*>(shape.get())) {
-        const Eigen::Vector3d n = vector(plane->plane_normal());
-        // CGAL's plane: n . x + d = 0 with n possibly not unit.
-        detected = {ElementClass::Plane, QuadricType::Plane, n.normalized(), -plane->d() / n.squaredNorm() * n, 0.0};
+        // CGAL's plane: n . x + d = 0 with n possibly not unit; kept through the centroid of its points.
+        detected = fit_plane(simplified, detected.members);
+        detected.axis = vector(plane->plane_normal()).normalized();
+        for (const std::size_t i : shape->indices_of_assigned_points()) detected.members.push_back(std::get<2>(ransac_input[i]));
       } else if (const auto* cylinder = dynamic_cast<const RansacCylinder*>(shape.get())) {
         const auto axis = cylinder->axis();
-        detected = {ElementClass::Cylinder, QuadricType::CircularCylinder, vector(axis.to_vector()).normalized(),
-                    point(axis.point(0)), cylinder->radius()};
+        detected.element_class = ElementClass::Cylinder;
+        detected.type = QuadricType::CircularCylinder;
+        detected.axis = vector(axis.to_vector()).normalized();
+        detected.point = point(axis.point(0));
+        detected.size = cylinder->radius();
       } else if (const auto* sphere = dynamic_cast<const RansacSphere*>(shape.get())) {
-        detected = {ElementClass::Sphere, QuadricType::Sphere, Eigen::Vector3d::Zero(), point(sphere->center()),
-                    sphere->radius()};
+        detected.element_class = ElementClass::Sphere;
+        detected.type = QuadricType::Sphere;
+        detected.point = point(sphere->center());
+        detected.size = sphere->radius();
       } else if (const auto* cone = dynamic_cast<const RansacCone*>(shape.get())) {
-        detected = {ElementClass::Cone, QuadricType::CircularCone, vector(cone->axis()).normalized(), point(cone->apex()),
-                    cone->angle()};
+        detected.element_class = ElementClass::Cone;
+        detected.type = QuadricType::CircularCone;
+        detected.axis = vector(cone->axis()).normalized();
+        detected.point = point(cone->apex());
+        detected.size = cone->angle();
       }  // tori stay Object (not quadrics; fitted as ellipsoids)
-      // A curved shape whose points are flat within epsilon is a plane: Efficient RANSAC otherwise
-      // returns strips of a large floor as cylinders (or cones) of huge radius.
-      if (detected.type != QuadricType::Plane && detected.element_class != ElementClass::Object) {
-        detail::Moments moments;
-        for (const std::size_t i : shape->indices_of_assigned_points())
-          moments.add(Eigen::Vector3d(input[i].first.x(), input[i].first.y(), input[i].first.z()));
-        const detail::Principal axes = detail::principal_axes(moments.covariance());
-        if (std::sqrt(axes.values(0)) <= shape_options.epsilon)
-          detected = {ElementClass::Plane, QuadricType::Plane, axes.vectors.col(0), moments.mean(), 0.0};
-      }
-      const int id = static_cast<int>(shapes.size());
-      shapes.push_back(detected);
-      for (const std::size_t i : shape->indices_of_assigned_points()) shape_of_representative[i] = id;
+      update_bounds(simplified, detected);
+      shapes.push_back(std::move(detected));
     }
   }
   result.timings_ms["shape_detection"] = detail::elapsed_ms(stage);
 
+  stage = std::chrono::steady_clock::now();
+  const double epsilon = shape_options.epsilon;
+  const auto explains = [&](const DetectedShape& candidate, const std::vector<std::uint32_t>& members) {
+    const Agreement fit = agreement(candidate, simplified, members, epsilon);
+    return fit.rms <= shape_options.explained_rms * epsilon && fit.inside_fraction >= shape_options.explained_fraction;
+  };
+  // The simplest quadric that explains a shape's points replaces it: Efficient RANSAC returns strips
+  // of a large floor as cylinders of huge radius, and columns as cones of a tiny angle.
+  for (DetectedShape& shape : shapes) {
+    if (shape.type == QuadricType::Plane || shape.type == QuadricType::Invalid) continue;
+    DetectedShape simpler = fit_plane(simplified, shape.members);
+    simpler.members = shape.members;
+    if (explains(simpler, shape.members)) {
+      simpler.lower = shape.lower, simpler.upper = shape.upper;
+      shape = std::move(simpler);
+      continue;
+    }
+    if (shape.type == QuadricType::CircularCone && fit_cylinder(simplified, shape.members, shape.axis, simpler) &&
+        explains(simpler, shape.members)) {
+      simpler.lower = shape.lower, simpler.upper = shape.upper;
+      shape = std::move(simpler);
+    }
+  }
+  std::stable_sort(shapes.begin(), shapes.end(),
+                   [](const DetectedShape& a, const DetectedShape& b) { return a.members.size() > b.members.size(); });
+
   // Efficient RANSAC keeps the largest connected piece of each candidate, so one surface cut by
-  // occlusion shadows (a plaza behind columns) returns as several shapes with equal parameters:
-  // those are merged into the first (largest) of them.
+  // occlusion shadows (a plaza behind columns) or seen in arcs from several stations (a column)
+  // returns as several shapes of similar parameters. A smaller shape joins a larger one of its type
+  // when their parameters are close and one refitted shape explains the points of both.
   if (shape_options.merge_equal_shapes && shapes.size() > 1) {
-    const double cos_angle = std::cos(shape_options.merge_angle_deg * 3.14159265358979323846 / 180.0);
+    const double cos_angle = std::cos(shape_options.merge_angle_deg * kPi / 180.0);
     const double distance = shape_options.merge_distance;
-    const auto line_distance = [](const Eigen::Vector3d& point, const Eigen::Vector3d& on_line, const Eigen::Vector3d& axis) {
-      const Eigen::Vector3d d = point - on_line;
-      return (d - d.dot(axis) * axis).norm();
+    const auto similar_size = [&](double a, double b) {
+      return std::abs(a - b) <= shape_options.merge_radius_fraction * std::max(a, b);
     };
-    const auto equal = [&](const DetectedShape& a, const DetectedShape& b) {
-      if (a.type != b.type || a.element_class != b.element_class) return false;
-      const bool parallel = std::abs(a.normal.dot(b.normal)) >= cos_angle;
-      const bool same_size = std::abs(a.size - b.size) <= shape_options.merge_radius_fraction * std::max(a.size, b.size);
+    const auto close = [&](const DetectedShape& a, const DetectedShape& b) {
+      if (a.type != b.type) return false;
+      const Eigen::Vector3d offset = b.point - a.point;
       switch (a.type) {
-        case QuadricType::Plane: return parallel && std::abs(a.normal.dot(b.point - a.point)) <= distance;
-        case QuadricType::CircularCylinder: return parallel && same_size && line_distance(b.point, a.point, a.normal) <= distance;
-        case QuadricType::Sphere: return same_size && (a.point - b.point).norm() <= distance;
+        case QuadricType::Plane:
+          return std::abs(a.axis.dot(b.axis)) >= cos_angle && std::abs(a.axis.dot(offset)) <= distance;
+        case QuadricType::CircularCylinder:
+          return std::abs(a.axis.dot(b.axis)) >= cos_angle && similar_size(a.size, b.size) &&
+                 (offset - offset.dot(a.axis) * a.axis).norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
+        case QuadricType::Sphere:
+          return similar_size(a.size, b.size) && offset.norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
         case QuadricType::CircularCone:
-          return a.normal.dot(b.normal) >= cos_angle && (a.point - b.point).norm() <= distance &&
-                 std::abs(a.size - b.size) <= shape_options.merge_angle_deg * 3.14159265358979323846 / 180.0;
+          return a.axis.dot(b.axis) >= cos_angle && offset.norm() <= distance &&
+                 std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0;
         default: return false;
       }
     };
-    std::vector<int> merged_into(shapes.size());
-    for (std::size_t id = 0; id < shapes.size(); ++id) {
-      merged_into[id] = static_cast<int>(id);
-      for (std::size_t earlier = 0; earlier < id; ++earlier)
-        if (merged_into[earlier] == static_cast<int>(earlier) && equal(shapes[earlier], shapes[id])) {
-          merged_into[id] = static_cast<int>(earlier);
-          break;
-        }
+    for (std::size_t b = 1; b < shapes.size(); ++b) {
+      for (std::size_t a = 0; a < b; ++a) {
+        if (shapes[a].members.empty() || !close(shapes[a], shapes[b])) continue;
+        std::vector<std::uint32_t> united = shapes[a].members;
+        united.insert(united.end(), shapes[b].members.begin(), shapes[b].members.end());
+        DetectedShape candidate;
+        if (!refit(simplified, united, shapes[a], candidate) || !explains(candidate, united)) continue;
+        candidate.lower = shapes[a].lower.cwiseMin(shapes[b].lower);
+        candidate.upper = shapes[a].upper.cwiseMax(shapes[b].upper);
+        shapes[a] = std::move(candidate);
+        shapes[b].members.clear();
+        break;
+      }
     }
-    for (int& id : shape_of_representative)
-      if (id >= 0) id = merged_into[static_cast<std::size_t>(id)];
   }
+
+  // A shape whose points larger shapes already explain (a strip of a column taken for a plane, a
+  // band of a dome, the seam where two walls meet) adds nothing: its points go to the shape that
+  // explains each of them, the rest are left out.
+  if (shape_options.absorb_fraction <= 1.0) {
+    const double reach = shape_options.cluster_epsilon;
+    for (std::size_t s = shapes.size(); s-- > 1;) {
+      DetectedShape& small = shapes[s];
+      if (small.members.empty()) continue;
+      std::vector<int> explainer(small.members.size(), -1);
+      std::size_t explained = 0;
+      for (std::size_t k = 0; k < small.members.size(); ++k) {
+        const Eigen::Vector3d p = simplified.col(small.members[k]);
+        double best = epsilon;
+        for (std::size_t l = 0; l < s; ++l) {
+          const DetectedShape& large = shapes[l];
+          if (large.members.empty() || (p.array() < large.lower.array() - reach).any() ||
+              (p.array() > large.upper.array() + reach).any())
+            continue;
+          const double d = surface_distance(large, p);
+          if (d <= best) best = d, explainer[k] = static_cast<int>(l);
+        }
+        if (explainer[k] >= 0) ++explained;
+      }
+      if (static_cast<double>(explained) < shape_options.absorb_fraction * static_cast<double>(small.members.size())) continue;
+      for (std::size_t k = 0; k < small.members.size(); ++k) {
+        if (explainer[k] < 0) continue;
+        DetectedShape& large = shapes[static_cast<std::size_t>(explainer[k])];
+        large.members.push_back(small.members[k]);
+        large.lower = large.lower.cwiseMin(simplified.col(small.members[k]));
+        large.upper = large.upper.cwiseMax(simplified.col(small.members[k]));
+      }
+      small.members.clear();
+    }
+  }
+  std::vector<int> shape_of_representative(input.size(), -1);
+  for (std::size_t id = 0; id < shapes.size(); ++id)
+    for (const std::uint32_t i : shapes[id].members) shape_of_representative[i] = static_cast<int>(id);
+  result.timings_ms["shape_refinement"] = detail::elapsed_ms(stage);
 
   std::vector<Element> elements(shapes.size());
   for (std::size_t id = 0; id < shapes.size(); ++id) {
@@ -265,12 +563,12 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
     const double cos_ten_degrees = std::cos(10.0 * 3.14159265358979323846 / 180.0);
     std::size_t largest = 0;
     for (std::size_t id = 0; id < shapes.size(); ++id)
-      if (shapes[id].type == QuadricType::Plane && std::abs(shapes[id].normal.dot(up)) >= cos_ten_degrees)
+      if (shapes[id].type == QuadricType::Plane && std::abs(shapes[id].axis.dot(up)) >= cos_ten_degrees)
         largest = std::max(largest, elements[id].point_indices.size());
     int ground = -1;
     double ground_height = 1e300;
     for (std::size_t id = 0; id < shapes.size(); ++id) {
-      if (shapes[id].type != QuadricType::Plane || std::abs(shapes[id].normal.dot(up)) < cos_ten_degrees) continue;
+      if (shapes[id].type != QuadricType::Plane || std::abs(shapes[id].axis.dot(up)) < cos_ten_degrees) continue;
       if (elements[id].point_indices.size() * 10 < largest) continue;
       double height = 0.0;
       for (const std::uint32_t index : elements[id].point_indices) height += up.dot(points.col(index));

@@ -126,7 +126,10 @@ struct ShapeDetectionOptions {
   bool merge_equal_shapes = true;      ///< merge shapes of one type with the same parameters (RANSAC returns one connected piece per shape, so a surface cut by occlusion shadows comes back in pieces)
   double merge_angle_deg = 3.0;        ///< merging: normals / axes within this angle, degrees
   double merge_distance = 0.15;        ///< merging: plane offsets, axis lines, centres and apexes within this distance, m
-  double merge_radius_fraction = 0.05; ///< merging: radii within this fraction (cones: half-angles within merge_angle_deg)
+  double merge_radius_fraction = 0.3;  ///< merging: radii within this fraction, axes and centres within merge_distance plus this fraction of the radius (cones: half-angles within merge_angle_deg); the refit then decides
+  double explained_rms = 0.5;          ///< a (refitted or simpler) shape explains points when their RMS distance to it is at most this fraction of epsilon ...
+  double explained_fraction = 0.9;     ///< ... and at least this fraction of them lie within epsilon
+  double absorb_fraction = 0.8;        ///< a shape whose points larger shapes explain (within epsilon) at this fraction is dissolved into them (> 1: off)
   std::uint32_t seed = 7;              ///< seed of CGAL's default random generator before detection (deterministic runs)
 };
 
