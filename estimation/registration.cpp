@@ -287,6 +287,14 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
             << rotation_error_degrees(result.candidates[rival].transform, best.transform) << " deg";
     return finish(RegistrationStatus::Ambiguous, summary.str());
   }
+  // Weak support: all candidates may agree and still rest on a handful of pairs that happen to be
+  // mutually consistent (3DMatch under an indoor configuration: cliques of 2-3 among 19 pairs,
+  // 170 deg off). Such an answer is a guess, not an `ok`.
+  if (best.clique_size < options.ambiguity.minimum_clique_for_ok) {
+    summary << " rests on only " << best.clique_size << " mutually consistent correspondences (fewer than "
+            << options.ambiguity.minimum_clique_for_ok << ")";
+    return finish(RegistrationStatus::Ambiguous, summary.str());
+  }
   return finish(RegistrationStatus::Ok, summary.str());
 }
 

@@ -61,6 +61,7 @@ struct AmbiguityOptions {
   double score_ratio = 0.85;                  ///< D_v(best) / D_v(second) above this counts as "scores close"
   double translation_disagreement = 2.0;      ///< candidates farther apart than this disagree, m (success rule: 2 m)
   double rotation_disagreement_degrees = 5.0; ///< or rotated more than this apart, degrees (success rule: 5 deg)
+  std::size_t minimum_clique_for_ok = 5;      ///< a winner supported by a smaller clique is `ambiguous`: 3 or 4 mutually consistent pairs arise by chance among hundreds
 };
 
 /// Every option of register_clouds; defaults are the paper's (§"Implementation Details").

@@ -212,7 +212,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
            walk(value, file, key,
                 {{"score_ratio", set(file, o.ambiguity.score_ratio)},
                  {"translation_disagreement", set(file, o.ambiguity.translation_disagreement)},
-                 {"rotation_disagreement_degrees", set(file, o.ambiguity.rotation_disagreement_degrees)}});
+                 {"rotation_disagreement_degrees", set(file, o.ambiguity.rotation_disagreement_degrees)},
+                 {"minimum_clique_for_ok", set(file, o.ambiguity.minimum_clique_for_ok)}});
          }}});
   if (refiner_registry().count(o.estimation.refiner) == 0)
     throw file_error(path, "key 'estimation.refiner': unknown refiner '" + o.estimation.refiner + "'");
@@ -308,6 +309,7 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
   key_value("score_ratio", options.ambiguity.score_ratio);
   key_value("translation_disagreement", options.ambiguity.translation_disagreement);
   key_value("rotation_disagreement_degrees", options.ambiguity.rotation_disagreement_degrees);
+  key_value("minimum_clique_for_ok", options.ambiguity.minimum_clique_for_ok);
   out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

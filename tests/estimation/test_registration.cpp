@@ -151,6 +151,26 @@ TEST(RegisterClouds, RecoversTheKnownTransformOfSyntheticStreetPairs) {
   EXPECT_GE(successes, rounds - 1) << "fewer than " << rounds - 1 << " of " << rounds << " synthetic pairs recovered";
 }
 
+TEST(RegisterModels, AWinnerOnTooSmallACliqueIsAmbiguousNotOk) {
+  const std::vector<Eigen::Vector3d> world = make_street_world(11);
+  RegistrationOptions options;
+  options.modelling.augmentation_threshold = 0;  // quadrics only, as in the street test above
+  const Eigen::Isometry3d target_pose = make_pose(35.0, {3.0, 1.0, 1.73});
+  const SceneModel source =
+      model_scene(observe(world, make_pose(0.0, {-4.0, -0.5, 1.73})), options.source_extraction, options.modelling).model;
+  const SceneModel target = model_scene(observe(world, target_pose), options.target_extraction, options.modelling).model;
+  const RegistrationResult supported = register_models(source, target, options);
+  ASSERT_EQ(supported.status, RegistrationStatus::Ok) << supported.message;
+  const std::size_t winner_clique = supported.candidates.at(supported.best_candidate).clique_size;
+  ASSERT_GE(winner_clique, options.ambiguity.minimum_clique_for_ok);
+  // The same answer, demanded one more supporting correspondence than it has: `ambiguous`, same transform.
+  options.ambiguity.minimum_clique_for_ok = winner_clique + 1;
+  const RegistrationResult weak = register_models(source, target, options);
+  EXPECT_EQ(weak.status, RegistrationStatus::Ambiguous);
+  EXPECT_NE(weak.message.find("rests on only " + std::to_string(winner_clique)), std::string::npos) << weak.message;
+  EXPECT_TRUE(weak.transform.isApprox(supported.transform));
+}
+
 TEST(RegisterClouds, DegenerateInputIsAStatusNotACrash) {
   // A single plane (ground only): rotation about its normal and translation along it are free.
   std::vector<Eigen::Vector3d> plane;

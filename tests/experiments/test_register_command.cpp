@@ -62,6 +62,7 @@ TEST(RegistrationConfig, PresetFilesMirrorTheCxxPresets) {
     EXPECT_DOUBLE_EQ(yaml.estimation.manhattan_tolerance_degrees, cxx.estimation.manhattan_tolerance_degrees);
     EXPECT_DOUBLE_EQ(yaml.selection.dcs_phi, cxx.selection.dcs_phi);
     EXPECT_DOUBLE_EQ(yaml.selection.manhattan_tolerance_degrees, cxx.selection.manhattan_tolerance_degrees);
+    EXPECT_EQ(yaml.ambiguity.minimum_clique_for_ok, cxx.ambiguity.minimum_clique_for_ok);
   }
 }
 
@@ -200,6 +201,7 @@ TEST(RegistrationConfig, PrintedConfigurationRoundTripsThroughApply) {
     options.modelling.fitter = "taubin";
     options.estimation.minimum_inliers = 4;
     options.ambiguity.score_ratio = 0.8125;
+    options.ambiguity.minimum_clique_for_ok = 7;
     const std::string yaml = registration_config_yaml(options);
     const std::string file = write_text(folder / (name + ".yaml"), "sensor: " + name + "\n" + yaml);
     RegistrationOptions applied = registration_preset(name == "vlp16" ? "monument" : "vlp16");  // start elsewhere
