@@ -149,39 +149,61 @@ PointCloud merge_aligned_clouds(const PointCloud& source, const PointCloud& targ
   return merged;
 }
 
+BirdsEyeFrame birds_eye_frame(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,
+                              const BirdsEyeOptions& options) {
+  BirdsEyeFrame frame;
+  if (options.half_extent > 0.0) {
+    frame.half_extent = options.half_extent;
+    return frame;
+  }
+  // At most ~100k points of each cloud decide the frame (percentiles are stable well before that).
+  std::vector<double> xs, ys;
+  const auto collect = [&](const PointCloud& cloud, const Eigen::Isometry3d& pose) {
+    const std::size_t stride = std::max<std::size_t>(1, cloud.size() / 100000);
+    for (std::size_t i = 0; i < cloud.size(); i += stride) {
+      const Eigen::Vector3d p = pose * cloud.point(i);
+      if (!p.allFinite()) continue;
+      xs.push_back(p.x());
+      ys.push_back(p.y());
+    }
+  };
+  collect(target, Eigen::Isometry3d::Identity());
+  collect(source, transform);
+  if (xs.empty()) return frame;
+  const auto percentile = [](std::vector<double>& values, double fraction) {
+    const std::size_t k = std::min(values.size() - 1, static_cast<std::size_t>(fraction * static_cast<double>(values.size())));
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+    return values[k];
+  };
+  const Eigen::Vector2d low(percentile(xs, 0.02), percentile(ys, 0.02));
+  const Eigen::Vector2d high(percentile(xs, 0.98), percentile(ys, 0.98));
+  frame.centre = 0.5 * (low + high);
+  frame.half_extent = std::clamp(0.55 * (high - low).maxCoeff(), 5.0, 200.0);  // scale bar >= 2 m: whole metres
+  return frame;
+}
+
 void write_birds_eye_png(const std::string& path, const PointCloud& source, const PointCloud& target,
                          const Eigen::Isometry3d& transform, const BirdsEyeOptions& options) {
   if (options.image_size < 64 || options.image_size > 16384)
     throw Error("write_birds_eye_png: image_size must be within 64..16384 pixels, got " + std::to_string(options.image_size));
-  double half_extent = options.half_extent;
-  if (!(half_extent > 0.0)) {
-    std::vector<float> horizontal;
-    horizontal.reserve(target.size());
-    for (Eigen::Index i = 0; i < target.positions.cols(); ++i)
-      horizontal.push_back(std::hypot(target.positions(0, i), target.positions(1, i)));
-    half_extent = 50.0;
-    if (!horizontal.empty()) {
-      const std::size_t k = horizontal.size() * 95 / 100;
-      std::nth_element(horizontal.begin(), horizontal.begin() + static_cast<std::ptrdiff_t>(k), horizontal.end());
-      half_extent = std::clamp(static_cast<double>(horizontal[k]), 20.0, 100.0);
-    }
-  }
+  const BirdsEyeFrame frame = birds_eye_frame(source, target, transform, options);
+  const double half_extent = frame.half_extent;
   Canvas canvas;
   canvas.size = options.image_size;
   canvas.pixels.assign(3 * static_cast<std::size_t>(canvas.size) * static_cast<std::size_t>(canvas.size), 255);
   const double pixels_per_metre = canvas.size / (2.0 * half_extent);
   const auto plot = [&](const Eigen::Vector3d& p, std::array<std::uint8_t, 3> color) {
     if (options.max_height > 0.0 && p.z() > options.max_height) return;
-    const int x = static_cast<int>(std::floor((p.x() + half_extent) * pixels_per_metre));
-    const int y = static_cast<int>(std::floor((half_extent - p.y()) * pixels_per_metre));
-    canvas.set(x, y, color);
+    canvas.set(static_cast<int>(std::floor((p.x() - frame.centre.x() + half_extent) * pixels_per_metre)),
+               static_cast<int>(std::floor((half_extent - p.y() + frame.centre.y()) * pixels_per_metre)), color);
   };
   for (std::size_t i = 0; i < target.size(); ++i) plot(target.point(i), {150, 150, 150});
   for (std::size_t i = 0; i < source.size(); ++i) plot(transform * source.point(i), {235, 100, 0});
-  // Target origin cross.
-  const int centre = canvas.size / 2;
-  canvas.fill(centre - 6, centre - 1, centre + 6, centre + 1, {0, 0, 200});
-  canvas.fill(centre - 1, centre - 6, centre + 1, centre + 6, {0, 0, 200});
+  // Target origin cross (may lie outside the framed scene).
+  const int origin_x = static_cast<int>(std::floor((half_extent - frame.centre.x()) * pixels_per_metre));
+  const int origin_y = static_cast<int>(std::floor((half_extent + frame.centre.y()) * pixels_per_metre));
+  canvas.fill(origin_x - 6, origin_y - 1, origin_x + 6, origin_y + 1, {0, 0, 200});
+  canvas.fill(origin_x - 1, origin_y - 6, origin_x + 1, origin_y + 6, {0, 0, 200});
   // Scale bar: the largest of 1/2/5 x 10^k metres not longer than a fifth of the image.
   const double longest = 0.2 * 2.0 * half_extent;
   double bar = std::pow(10.0, std::floor(std::log10(longest)));

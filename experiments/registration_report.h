@@ -46,9 +46,22 @@ PointCloud merge_aligned_clouds(const PointCloud& source, const PointCloud& targ
 /// Options of the bird's-eye picture.
 struct BirdsEyeOptions {
   int image_size = 1024;        ///< width = height of the square image, pixels
-  double half_extent = 0.0;     ///< half side of the pictured square around the target origin, m (0: 95th percentile of target horizontal range, 20..100 m)
+  double half_extent = 0.0;     ///< half side of the pictured square around the target origin, m (0: framed on both clouds, see birds_eye_frame)
   double max_height = 0.0;      ///< points higher than this above the target origin are left out, m (0: keep all); roofs hide streets
 };
+
+/// The square a bird's-eye picture shows: centre (x, y) and half side, m.
+struct BirdsEyeFrame {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  ///< centre of the pictured square, target frame, m
+  double half_extent = 50.0;                         ///< half side of the pictured square, m
+};
+
+/// Frames the target and the transformed source together: the box between the 2nd and 98th
+/// percentiles of their x and of their y (stray far points do not shrink the scene), squared,
+/// with a 10% margin, half side clamped to 5..200 m. With options.half_extent > 0, that square
+/// around the target origin instead.
+BirdsEyeFrame birds_eye_frame(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,
+                              const BirdsEyeOptions& options = {});
 
 /// Writes a PNG seen from above (x right, y up): white background, target grey, transformed source
 /// orange, a scale bar with its length in metres (bottom left), the target origin as a cross. Atomic.

@@ -271,5 +271,33 @@ TEST(RegistrationReport, JsonFollowsTheContractAndPicturesAreWritten) {
   EXPECT_EQ(read_point_cloud((folder / "merged.ply").string()).size(), 1000u);
 }
 
+TEST(RegistrationReport, BirdsEyePictureFramesBothCloudsWhereverTheyAre) {
+  // A 30 m x 10 m scene 200 m east of the target origin, plus 1% stray points 5 km away; the
+  // source is the same scene, moved by the registration's transform onto the target.
+  PointCloud target;
+  target.positions = Eigen::Matrix3Xf::Random(3, 2000);
+  target.positions.row(0) = target.positions.row(0) * 15.0f + Eigen::RowVectorXf::Constant(2000, 200.0f);
+  target.positions.row(1) = target.positions.row(1) * 5.0f + Eigen::RowVectorXf::Constant(2000, -50.0f);
+  for (Eigen::Index i = 0; i < 20; ++i) target.positions.col(i) = Eigen::Vector3f(5000.0f, 5000.0f, 0.0f);
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
+  transform.translation() = Eigen::Vector3d(10.0, 0.0, 0.0);
+  PointCloud source = target;
+  source.positions = (transform.inverse().cast<float>() * target.positions).eval();
+  const BirdsEyeFrame frame = birds_eye_frame(source, target, transform);
+  EXPECT_NEAR(frame.centre.x(), 200.0, 1.5);
+  EXPECT_NEAR(frame.centre.y(), -50.0, 1.5);
+  EXPECT_GT(frame.half_extent, 15.0);  // the whole 30 m width fits
+  EXPECT_LT(frame.half_extent, 20.0);  // and the strays do not shrink it
+  // A 3 m room keeps a 5 m half side (whole-metre scale bar); a fixed half extent centres on the origin.
+  PointCloud room;
+  room.positions = Eigen::Matrix3Xf::Random(3, 500) * 1.5f;
+  EXPECT_DOUBLE_EQ(birds_eye_frame(room, room, Eigen::Isometry3d::Identity()).half_extent, 5.0);
+  BirdsEyeOptions fixed;
+  fixed.half_extent = 30.0;
+  const BirdsEyeFrame around_origin = birds_eye_frame(source, target, transform, fixed);
+  EXPECT_DOUBLE_EQ(around_origin.half_extent, 30.0);
+  EXPECT_TRUE(around_origin.centre.isZero());
+}
+
 }  // namespace
 }  // namespace quadrix
