@@ -298,6 +298,13 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
   return finish(RegistrationStatus::Ok, summary.str());
 }
 
+bool augment_other_side(const PointCloud& cloud, ModellingResult& modelling, const ModellingResult& other,
+                        const ModellingOptions& options) {
+  if (modelling.model.augmented_count() > 0 || other.model.augmented_count() == 0) return false;
+  augment_scene_model(cloud.positions.cast<double>(), modelling, options);
+  return modelling.model.augmented_count() > 0;
+}
+
 RegistrationResult register_clouds(const PointCloud& source, const PointCloud& target, const RegistrationOptions& options,
                                    const std::vector<std::uint32_t>& source_labels,
                                    const std::vector<std::uint32_t>& target_labels) {
@@ -308,11 +315,20 @@ RegistrationResult register_clouds(const PointCloud& source, const PointCloud& t
   if (!target_labels.empty()) target_extraction.semantic_mode = SemanticMode::Labels;
 
   Clock::time_point stage = Clock::now();
-  const ModellingResult source_modelling = model_scene(source, source_extraction, options.modelling, source_labels);
-  const double source_ms = elapsed_ms(stage);
+  ModellingResult source_modelling = model_scene(source, source_extraction, options.modelling, source_labels);
+  double source_ms = elapsed_ms(stage);
   stage = Clock::now();
-  const ModellingResult target_modelling = model_scene(target, target_extraction, options.modelling, target_labels);
-  const double target_ms = elapsed_ms(stage);
+  ModellingResult target_modelling = model_scene(target, target_extraction, options.modelling, target_labels);
+  double target_ms = elapsed_ms(stage);
+  // delta_a is decided per cloud, but augmented points only match augmented points: when one side
+  // fell below delta_a and the other did not, augment the other too.
+  if (options.correspondences.match_augmented_points) {
+    stage = Clock::now();
+    if (augment_other_side(source, source_modelling, target_modelling, options.modelling))
+      source_ms += elapsed_ms(stage);
+    else if (augment_other_side(target, target_modelling, source_modelling, options.modelling))
+      target_ms += elapsed_ms(stage);
+  }
 
   RegistrationResult result = register_models(source_modelling.model, target_modelling.model, options);
   result.timings_ms["modelling_source"] = source_ms;

@@ -138,8 +138,15 @@ FactorBuildOptions estimation_factor_options(const SceneModel& source, const Sce
 RegistrationResult register_models(const SceneModel& source, const SceneModel& target,
                                    const RegistrationOptions& options = {});
 
+/// Gives `modelling` (of `cloud`) augmented points when `other` has some and it has none
+/// (augment_scene_model): delta_a is decided per cloud, augmented points match only augmented
+/// points. Returns whether points were added. register_clouds and the benchmark use it.
+bool augment_other_side(const PointCloud& cloud, ModellingResult& modelling, const ModellingResult& other,
+                        const ModellingOptions& options);
+
 /// Registers `source` onto `target` (paper Fig. overview): model_scene on both clouds with their
-/// extraction options, then register_models. Optional per-point SemanticKITTI labels switch that
+/// extraction options, the other side augmented when only one side was (augment_other_side), then
+/// register_models. Optional per-point SemanticKITTI labels switch that
 /// side to the labels semantic mode. Degenerate input (empty clouds, one wall) gives a status.
 RegistrationResult register_clouds(const PointCloud& source, const PointCloud& target,
                                    const RegistrationOptions& options = {},

@@ -108,7 +108,7 @@ class SharedCache {
 };
 
 struct CachedModel {
-  SceneModel model;
+  ModellingResult modelling;  // the model with its elements (augment_other_side needs them)
   double modelling_ms = 0.0;
   long long bytes = 0;
 };
@@ -189,9 +189,9 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   const auto build = [](const PointCloud& cloud, const ExtractionOptions& extraction, const ModellingOptions& modelling) {
     CachedModel cached;
     const Clock::time_point start = Clock::now();
-    cached.model = model_scene(cloud, extraction, modelling).model;
+    cached.modelling = model_scene(cloud, extraction, modelling);
     cached.modelling_ms = elapsed_ms(start);
-    cached.bytes = static_cast<long long>(scene_model_to_binary(cached.model).size());
+    cached.bytes = static_cast<long long>(scene_model_to_binary(cached.modelling.model).size());
     return cached;
   };
   std::shared_ptr<const CachedModel> source_model;
@@ -206,10 +206,26 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
       return build(*input.source, registration.source_extraction, registration.modelling);
     });
   }
-  const std::shared_ptr<const CachedModel> target_model = context.models.get(
+  std::shared_ptr<const CachedModel> target_model = context.models.get(
       model_key(pair.target, "target"), [&] { return build(*input.target, registration.target_extraction, registration.modelling); });
-  const SceneModel source = apply_model_ablation(context.options->ablation, source_model->model);
-  const SceneModel target = apply_model_ablation(context.options->ablation, target_model->model);
+  // As register_clouds: when only one side was augmented, augment the other (per pair, not cached:
+  // the cache holds each cloud's own model).
+  if (registration.correspondences.match_augmented_points) {
+    const auto augmented = [&](const PointCloud& cloud, const CachedModel& own, const CachedModel& other) {
+      auto copy = std::make_shared<CachedModel>(own);
+      const Clock::time_point start = Clock::now();
+      if (!augment_other_side(cloud, copy->modelling, other.modelling, registration.modelling)) return std::shared_ptr<const CachedModel>();
+      copy->modelling_ms += elapsed_ms(start);
+      copy->bytes = static_cast<long long>(scene_model_to_binary(copy->modelling.model).size());
+      return std::shared_ptr<const CachedModel>(copy);
+    };
+    if (auto source_augmented = augmented(*input.source, *source_model, *target_model))
+      source_model = source_augmented;
+    else if (auto target_augmented = augmented(*input.target, *target_model, *source_model))
+      target_model = target_augmented;
+  }
+  const SceneModel source = apply_model_ablation(context.options->ablation, source_model->modelling.model);
+  const SceneModel target = apply_model_ablation(context.options->ablation, target_model->modelling.model);
 
   const RegistrationResult result = register_models(source, target, registration);
   BenchMethodOutput output;

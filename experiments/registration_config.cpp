@@ -171,7 +171,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
                  {"quadrics_per_class", set(file, o.modelling.quadrics_per_class)},
                  {"augmentation_threshold", set(file, o.modelling.augmentation_threshold)},
                  {"augmented_elements_per_class", set(file, o.modelling.augmented_elements_per_class)},
-                 {"augmentation_voxel", set(file, o.modelling.augmentation_voxel)}});
+                 {"augmentation_voxel", set(file, o.modelling.augmentation_voxel)},
+                 {"maximum_augmented_points", set(file, o.modelling.maximum_augmented_points)}});
          }},
         {"matching",
          [&](const YAML::Node& value, const std::string& key) {
@@ -283,6 +284,7 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
   key_value("augmentation_threshold", options.modelling.augmentation_threshold);
   key_value("augmented_elements_per_class", options.modelling.augmented_elements_per_class);
   key_value("augmentation_voxel", options.modelling.augmentation_voxel);
+  key_value("maximum_augmented_points", options.modelling.maximum_augmented_points);
   out << YAML::EndMap;
   begin("matching");
   key_value("top_k_similar", options.correspondences.top_k_similar);

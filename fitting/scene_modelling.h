@@ -25,6 +25,7 @@ struct ModellingOptions {
   int augmentation_threshold = 60;       ///< delta_a: augment when fewer quadrics than this (paper 60)
   int augmented_elements_per_class = 10; ///< K_a: largest elements per class that are down-sampled (paper 10)
   double augmentation_voxel = 0.5;       ///< v_a: voxel size of the augmentation down-sampling, m (paper 0.5)
+  int maximum_augmented_points = 1500;   ///< at most this many augmented points, evenly strided over the K_a elements' voxels (0: no cap; the paper has none, KITTI gives ~6k)
   bool compute_descriptors = true;       ///< compute FPFH descriptors of augmented points (PCL)
   double descriptor_normal_radius = 1.0; ///< normal estimation radius for FPFH, m (2 v_a)
   double descriptor_radius = 2.5;        ///< FPFH support radius, m (5 v_a)
@@ -60,6 +61,12 @@ struct ModellingResult {
 /// model.timings_ms for "fitting", "selection", "augmentation"). `extraction` is copied into the result.
 ModellingResult model_elements(const Eigen::Matrix3Xd& points, const ExtractionResult& extraction,
                                const ModellingOptions& options);
+
+/// Adds the paper's augmented points to a model that has none (paper §"Quadric Modeling"): the
+/// K_a largest kept elements per class, voxel-down-sampled at v_a, one point-type record per voxel
+/// with its FPFH descriptor. model_elements calls it below delta_a quadrics; registration calls it
+/// on the other side of a pair when only one side was augmented (augmented matches need both).
+void augment_scene_model(const Eigen::Matrix3Xd& points, ModellingResult& modelling, const ModellingOptions& options);
 
 /// Extraction (extract_elements) followed by model_elements: the whole paper §"Quadric-based Scene
 /// Representation". Timings of every stage and "total" are in model.timings_ms.

@@ -171,6 +171,44 @@ TEST(RegisterModels, AWinnerOnTooSmallACliqueIsAmbiguousNotOk) {
   EXPECT_TRUE(weak.transform.isApprox(supported.transform));
 }
 
+TEST(RegisterClouds, OnlyOneSideBelowDeltaAAugmentsBothSides) {
+  const std::vector<Eigen::Vector3d> world = make_street_world(12);
+  const Eigen::Isometry3d source_pose = make_pose(0.0, {-4.0, -0.5, 1.73});
+  const Eigen::Isometry3d target_pose = make_pose(35.0, {3.0, 1.0, 1.73});
+  const PointCloud source = observe(world, source_pose);
+  const PointCloud target = observe(world, target_pose);
+  RegistrationOptions options;
+  options.modelling.maximum_augmented_points = 300;  // few augmented points: this scene is densely sampled
+  options.modelling.augmentation_threshold = 0;
+  ModellingResult source_modelling = model_scene(source, options.source_extraction, options.modelling);
+  ModellingResult target_modelling = model_scene(target, options.target_extraction, options.modelling);
+  ASSERT_EQ(source_modelling.model.augmented_count(), 0u);
+  // Nothing to match on the other side: no augmentation.
+  EXPECT_FALSE(augment_other_side(source, source_modelling, target_modelling, options.modelling));
+  augment_scene_model(target.positions.cast<double>(), target_modelling, options.modelling);
+  ASSERT_GT(target_modelling.model.augmented_count(), 0u);
+  ASSERT_EQ(target_modelling.model.augmented_descriptors.size(), target_modelling.model.augmented_count());
+  EXPECT_TRUE(augment_other_side(source, source_modelling, target_modelling, options.modelling));
+  EXPECT_EQ(source_modelling.model.augmented_count(), 300u);  // the cap holds
+  EXPECT_EQ(source_modelling.model.augmented_descriptors.size(), source_modelling.model.augmented_count());
+  EXPECT_EQ(source_modelling.record_elements.size(), source_modelling.model.size());
+  EXPECT_FALSE(augment_other_side(source, source_modelling, target_modelling, options.modelling));  // already has them
+
+  // register_clouds: delta_a between the two quadric counts puts exactly one side below it.
+  const std::size_t source_quadrics = source_modelling.model.augmented_begin;
+  const std::size_t target_quadrics = target_modelling.model.augmented_begin;
+  ASSERT_NE(source_quadrics, target_quadrics) << "pick another seed: both sides have " << source_quadrics << " quadrics";
+  options.modelling.augmentation_threshold = static_cast<int>(std::max(source_quadrics, target_quadrics));
+  const RegistrationResult result = register_clouds(source, target, options);
+  std::printf("quadrics %zu/%zu, augmented %zu/%zu, status %s, RTE %.3f m\n", source_quadrics, target_quadrics,
+              result.source_model.augmented_count(), result.target_model.augmented_count(),
+              registration_status_name(result.status), translation_error(result.transform, target_pose.inverse() * source_pose));
+  EXPECT_GT(result.source_model.augmented_count(), 0u);
+  EXPECT_GT(result.target_model.augmented_count(), 0u);
+  EXPECT_GT(result.counts.augmented_correspondences, 0u);
+  EXPECT_TRUE(registration_succeeded(result.transform, target_pose.inverse() * source_pose));
+}
+
 TEST(RegisterClouds, DegenerateInputIsAStatusNotACrash) {
   // A single plane (ground only): rotation about its normal and translation along it are free.
   std::vector<Eigen::Vector3d> plane;

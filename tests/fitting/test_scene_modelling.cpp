@@ -111,6 +111,32 @@ TEST(SceneModelling, KeepsTopKePerClassBySize) {
   for (const QuadricRecord& record : result.model.records) EXPECT_TRUE(all_finite(record));
 }
 
+TEST(SceneModelling, AugmentedPointsAreCappedByAnEvenStride) {
+  const PointCloud cloud = make_blob_field(12, 5);
+  ModellingOptions options;
+  options.maximum_augmented_points = 0;  // no cap
+  const ModellingResult all = model_scene(cloud, extraction_preset("vlp64"), options);
+  ASSERT_GT(all.model.augmented_count(), 30u);
+  options.maximum_augmented_points = static_cast<int>(all.model.augmented_count() / 3);
+  const ModellingResult capped = model_scene(cloud, extraction_preset("vlp64"), options);
+  ASSERT_EQ(capped.model.augmented_count(), static_cast<std::size_t>(options.maximum_augmented_points));
+  EXPECT_EQ(capped.model.augmented_descriptors.size(), capped.model.augmented_count());
+  EXPECT_EQ(capped.record_elements.size(), capped.model.size());
+  // Every kept point is one of the uncapped points, in the same order, spread over the whole list.
+  std::size_t next = all.model.augmented_begin;
+  for (std::size_t i = capped.model.augmented_begin; i < capped.model.size(); ++i) {
+    while (next < all.model.size() && !all.model.records[next].full_center.isApprox(capped.model.records[i].full_center)) ++next;
+    ASSERT_LT(next, all.model.size()) << "capped point " << i << " is not an uncapped point in order";
+    EXPECT_EQ(capped.model.records[i].label, all.model.records[next].label);
+  }
+  EXPECT_TRUE(capped.model.records.back().full_center.isApprox(
+      all.model.records[all.model.augmented_begin + (options.maximum_augmented_points - 1) * all.model.augmented_count() /
+                                                        static_cast<std::size_t>(options.maximum_augmented_points)]
+          .full_center));
+  options.maximum_augmented_points = -1;
+  EXPECT_THROW(model_scene(cloud, extraction_preset("vlp64"), options), Error);
+}
+
 TEST(SceneModelling, AugmentationOnlyBelowDeltaA) {
   const PointCloud cloud = make_blob_field(12, 5);
   ModellingOptions options;
