@@ -288,6 +288,106 @@ bool fit_sphere(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>
   return true;
 }
 
+/// Circular cone of the members from their normals (paper §"Quadric Extraction", static scans): the
+/// normals of a cone make one angle with its axis, so the axis is the direction in which the
+/// (consistently oriented) normals vary least and the apex is the least-squares meet of the tangent
+/// planes; Levenberg-Marquardt on the point-to-cone distances then refines apex, axis and half-angle.
+/// False when the normals do not pin a cone down (a flat or nearly parallel set).
+bool fit_cone(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, const std::vector<std::uint32_t>& members,
+              DetectedShape& cone) {
+  if (members.size() < 6) return false;
+  const std::size_t stride = std::max<std::size_t>(1, members.size() / 2000);
+  std::vector<std::uint32_t> sample;
+  for (std::size_t k = 0; k < members.size(); k += stride) sample.push_back(members[k]);
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const std::uint32_t i : sample) scatter.noalias() += normals.col(i) * normals.col(i).transpose();
+  const Eigen::Vector3d reference = detail::principal_axes(scatter).vectors.col(2);
+  detail::Moments oriented;
+  Eigen::Matrix3d plane_normal_sum = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d plane_offset_sum = Eigen::Vector3d::Zero();
+  for (const std::uint32_t i : sample) {
+    const Eigen::Vector3d n = normals.col(i).dot(reference) < 0.0 ? Eigen::Vector3d(-normals.col(i)) : Eigen::Vector3d(normals.col(i));
+    oriented.add(n);
+    plane_normal_sum.noalias() += n * n.transpose();
+    plane_offset_sum += n * n.dot(points.col(i));
+  }
+  const detail::Principal spread = detail::principal_axes(oriented.covariance());
+  if (!(spread.values(1) > 1e-6)) return false;  // normals on one line or a point: no axis
+  Eigen::Vector3d axis = spread.vectors.col(0);
+  const Eigen::FullPivLU<Eigen::Matrix3d> solver(plane_normal_sum);
+  if (!solver.isInvertible()) return false;
+  Eigen::Vector3d apex = solver.solve(plane_offset_sum);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const std::uint32_t i : sample) centroid += points.col(i);
+  centroid /= static_cast<double>(sample.size());
+  if (axis.dot(centroid - apex) < 0.0) axis = -axis;
+  double angle = 0.0;
+  for (const std::uint32_t i : sample) angle += std::acos(std::clamp(axis.dot((points.col(i) - apex).normalized()), -1.0, 1.0));
+  angle /= static_cast<double>(sample.size());
+  if (!apex.allFinite() || !std::isfinite(angle)) return false;
+
+  // Levenberg-Marquardt on 6 parameters: apex (3), axis tilt (2), half-angle (1); numeric Jacobian.
+  using Vector6 = Eigen::Matrix<double, 6, 1>;
+  const auto residuals = [&](const Vector6& delta, const Eigen::Vector3d& a0, const Eigen::Vector3d& p0, double alpha0,
+                             Eigen::VectorXd& out) {
+    const Eigen::Vector3d helper = std::abs(a0.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d t1 = a0.cross(helper).normalized(), t2 = a0.cross(t1);
+    DetectedShape trial;
+    trial.type = QuadricType::CircularCone;
+    trial.point = p0 + delta.head<3>();
+    trial.axis = (a0 + delta(3) * t1 + delta(4) * t2).normalized();
+    trial.size = alpha0 + delta(5);
+    out.resize(static_cast<Eigen::Index>(sample.size()));
+    for (std::size_t k = 0; k < sample.size(); ++k) {
+      const Eigen::Vector3d d = points.col(sample[k]) - trial.point;
+      const double along = d.dot(trial.axis), across = (d - along * trial.axis).norm();
+      out(static_cast<Eigen::Index>(k)) = across * std::cos(trial.size) - along * std::sin(trial.size);
+    }
+    return trial;
+  };
+  double damping = 1e-3;
+  Eigen::VectorXd current, trial_values;
+  residuals(Vector6::Zero(), axis, apex, angle, current);
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    Eigen::MatrixXd jacobian(current.size(), 6);
+    for (int p = 0; p < 6; ++p) {
+      Vector6 h = Vector6::Zero();
+      h(p) = 1e-6 * (p < 3 ? std::max(1.0, apex.norm()) : 1.0);
+      Eigen::VectorXd shifted;
+      residuals(h, axis, apex, angle, shifted);
+      jacobian.col(p) = (shifted - current) / h(p);
+    }
+    const Eigen::Matrix<double, 6, 6> jtj = jacobian.transpose() * jacobian;
+    const Vector6 jtr = jacobian.transpose() * current;
+    bool improved = false;
+    for (int attempt = 0; attempt < 8 && !improved; ++attempt) {
+      Eigen::Matrix<double, 6, 6> damped = jtj;
+      damped.diagonal() += damping * jtj.diagonal().cwiseMax(1e-12);
+      const Vector6 step = damped.ldlt().solve(-jtr);
+      if (!step.allFinite()) return false;
+      const DetectedShape moved = residuals(step, axis, apex, angle, trial_values);
+      if (trial_values.squaredNorm() < current.squaredNorm()) {
+        apex = moved.point, axis = moved.axis, angle = moved.size;
+        current = trial_values;
+        damping = std::max(1e-9, damping * 0.3);
+        improved = true;
+        if (step.norm() < 1e-9) iteration = 30;
+      } else {
+        damping *= 10.0;
+      }
+    }
+    if (!improved) break;
+  }
+  if (!(angle > 0.0 && angle < 0.5 * kPi) || !apex.allFinite()) return false;
+  cone = DetectedShape();
+  cone.element_class = ElementClass::Cone;
+  cone.type = QuadricType::CircularCone;
+  cone.point = apex;
+  cone.axis = axis;
+  cone.size = angle;
+  return true;
+}
+
 void update_bounds(const Eigen::Matrix3Xd& points, DetectedShape& shape) {
   shape.lower = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   shape.upper = -shape.lower;
@@ -297,16 +397,44 @@ void update_bounds(const Eigen::Matrix3Xd& points, DetectedShape& shape) {
   }
 }
 
-/// The same shape refitted to `members` (planes, cylinders with the given axis, spheres; cones keep
-/// their parameters). False when the fit fails.
-bool refit(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members, const DetectedShape& shape,
-           DetectedShape& refitted) {
+/// Whether some point of `b` lies within `gap` of a point of `a` (points hashed in cells of `gap`).
+/// gap <= 0: always true.
+bool pieces_within(const Eigen::Matrix3Xd& points, const DetectedShape& a, const DetectedShape& b, double gap) {
+  if (!(gap > 0.0)) return true;
+  if (((b.lower - a.upper).array() > gap).any() || ((a.lower - b.upper).array() > gap).any()) return false;
+  const DetectedShape& indexed = a.members.size() <= b.members.size() ? a : b;
+  const DetectedShape& queried = a.members.size() <= b.members.size() ? b : a;
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
+  const auto cell = [&](std::uint32_t i) { return Eigen::Vector3i((points.col(i) / gap).array().floor().cast<int>()); };
+  for (const std::uint32_t i : indexed.members) {
+    const Eigen::Vector3i c = cell(i);
+    cells[detail::voxel_key(c.x(), c.y(), c.z())].push_back(i);
+  }
+  const double gap_squared = gap * gap;
+  for (const std::uint32_t i : queried.members) {
+    const Eigen::Vector3i c = cell(i);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto found = cells.find(detail::voxel_key(c.x() + dx, c.y() + dy, c.z() + dz));
+          if (found == cells.end()) continue;
+          for (const std::uint32_t j : found->second)
+            if ((points.col(i) - points.col(j)).squaredNorm() <= gap_squared) return true;
+        }
+  }
+  return false;
+}
+
+/// The same shape refitted to `members` (planes, cylinders with the given axis, spheres, cones).
+/// False when the fit fails.
+bool refit(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, const std::vector<std::uint32_t>& members,
+           const DetectedShape& shape, DetectedShape& refitted) {
   refitted = shape;
   switch (shape.type) {
     case QuadricType::Plane: refitted = fit_plane(points, members); break;
     case QuadricType::CircularCylinder: if (!fit_cylinder(points, members, shape.axis, refitted)) return false; break;
     case QuadricType::Sphere: if (!fit_sphere(points, members, refitted)) return false; break;
-    case QuadricType::CircularCone: break;
+    case QuadricType::CircularCone: if (!fit_cone(points, normals, members, refitted)) return false; break;
     default: return false;
   }
   refitted.members = members;
@@ -375,6 +503,10 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
   Eigen::Matrix3Xd simplified(3, static_cast<Eigen::Index>(input.size()));
   for (std::size_t i = 0; i < input.size(); ++i)
     simplified.col(static_cast<Eigen::Index>(i)) = Eigen::Vector3d(input[i].first.x(), input[i].first.y(), input[i].first.z());
+  Eigen::Matrix3Xd simplified_normals(3, static_cast<Eigen::Index>(input.size()));
+  for (std::size_t i = 0; i < input.size(); ++i)
+    simplified_normals.col(static_cast<Eigen::Index>(i)) =
+        Eigen::Vector3d(input[i].second.x(), input[i].second.y(), input[i].second.z()).normalized();
   std::vector<DetectedShape> shapes;
   if (input.size() >= static_cast<std::size_t>(std::max(3, shape_options.minimum_points))) {
     CGAL::get_default_random() = CGAL::Random(shape_options.seed);
@@ -409,10 +541,9 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
     for (const auto& shape : ransac.shapes()) {
       DetectedShape detected;
       for (const std::size_t i : shape->indices_of_assigned_points()) detected.members.push_back(std::get<2>(ransac_input[i]));
-      if (const auto* plane = dynamic_cast<const RansacPlane*>(shape.get())) {
-        // CGAL's plane: n . x + d = 0 with n possibly not unit; kept through the centroid of its points.
+      if (dynamic_cast<const RansacPlane*>(shape.get()) != nullptr) {
+        // CGAL's plane from its last refit may be off on far, sparse pieces: least squares on its points.
         detected = fit_plane(simplified, detected.members);
-        detected.axis = vector(plane->plane_normal()).normalized();
         for (const std::size_t i : shape->indices_of_assigned_points()) detected.members.push_back(std::get<2>(ransac_input[i]));
       } else if (const auto* cylinder = dynamic_cast<const RansacCylinder*>(shape.get())) {
         const auto axis = cylinder->axis();
@@ -460,6 +591,20 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
         explains(simpler, shape.members)) {
       simpler.lower = shape.lower, simpler.upper = shape.upper;
       shape = std::move(simpler);
+      continue;
+    }
+    // The other way round: a piece of a wide cone seen from afar (noisy normals, so Efficient RANSAC
+    // never proposes the cone) comes back as a cylinder; a cone fitted from its normals that halves
+    // the distances of a cylinder on the same points replaces it.
+    DetectedShape cone, cylinder;
+    if (shape.type == QuadricType::CircularCylinder && fit_cylinder(simplified, shape.members, shape.axis, cylinder) &&
+        fit_cone(simplified, simplified_normals, shape.members, cone) &&
+        cone.size >= shape_options.minimum_cone_angle_deg * kPi / 180.0 && explains(cone, shape.members) &&
+        agreement(cone, simplified, shape.members, epsilon).rms <=
+            0.5 * agreement(cylinder, simplified, shape.members, epsilon).rms) {
+      cone.members = std::move(shape.members);
+      cone.lower = shape.lower, cone.upper = shape.upper;
+      shape = std::move(cone);
     }
   }
   std::stable_sort(shapes.begin(), shapes.end(),
@@ -471,7 +616,13 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
   // when their parameters are close and one refitted shape explains the points of both.
   if (shape_options.merge_equal_shapes && shapes.size() > 1) {
     const double cos_angle = std::cos(shape_options.merge_angle_deg * kPi / 180.0);
+    const double cos_ten_degrees = std::cos(10.0 * kPi / 180.0);
+    const Eigen::Vector3d up = options.up.normalized();
     const double distance = shape_options.merge_distance;
+    const DetectedShape* ground_candidate = nullptr;
+    for (const DetectedShape& shape : shapes)
+      if (ground_candidate == nullptr && shape.type == QuadricType::Plane && std::abs(shape.axis.dot(up)) >= cos_ten_degrees)
+        ground_candidate = &shape;
     const auto similar_size = [&](double a, double b) {
       return std::abs(a - b) <= shape_options.merge_radius_fraction * std::max(a, b);
     };
@@ -480,15 +631,19 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
       const Eigen::Vector3d offset = b.point - a.point;
       switch (a.type) {
         case QuadricType::Plane:
-          return std::abs(a.axis.dot(b.axis)) >= cos_angle && std::abs(a.axis.dot(offset)) <= distance;
+          // Coplanar faces far apart stay apart (a podium and an entablature in one plane), except on
+          // the largest near-horizontal plane: the ground, shadowed by everything on it.
+          return std::abs(a.axis.dot(b.axis)) >= cos_angle && std::abs(a.axis.dot(offset)) <= distance &&
+                 (&a == ground_candidate ||
+                  pieces_within(simplified, a, b, shape_options.merge_plane_gap));
         case QuadricType::CircularCylinder:
           return std::abs(a.axis.dot(b.axis)) >= cos_angle && similar_size(a.size, b.size) &&
                  (offset - offset.dot(a.axis) * a.axis).norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
         case QuadricType::Sphere:
           return similar_size(a.size, b.size) && offset.norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
         case QuadricType::CircularCone:
-          return a.axis.dot(b.axis) >= cos_angle && offset.norm() <= distance &&
-                 std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0;
+          // Apexes of wide cones fitted to pieces lie far from the points: only axes and angles gate.
+          return a.axis.dot(b.axis) >= cos_angle && std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0;
         default: return false;
       }
     };
@@ -498,7 +653,7 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
         std::vector<std::uint32_t> united = shapes[a].members;
         united.insert(united.end(), shapes[b].members.begin(), shapes[b].members.end());
         DetectedShape candidate;
-        if (!refit(simplified, united, shapes[a], candidate) || !explains(candidate, united)) continue;
+        if (!refit(simplified, simplified_normals, united, shapes[a], candidate) || !explains(candidate, united)) continue;
         candidate.lower = shapes[a].lower.cwiseMin(shapes[b].lower);
         candidate.upper = shapes[a].upper.cwiseMax(shapes[b].upper);
         shapes[a] = std::move(candidate);
