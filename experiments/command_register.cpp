@@ -81,6 +81,12 @@ void run(const RegisterCommandOptions& options) {
               result.timings_ms.at("correspondences") + result.timings_ms.at("graphs") + result.timings_ms.at("cliques"),
               result.timings_ms.at("estimation"), result.timings_ms.at("selection"), c.source_quadrics, c.target_quadrics,
               c.correspondences, cliques.empty() ? "-" : cliques.c_str());
+  std::optional<Eigen::Vector4d> source_ground;
+  if (result.source_model.has_ground)
+    source_ground = Eigen::Vector4d(result.source_model.ground_normal.x(), result.source_model.ground_normal.y(),
+                                    result.source_model.ground_normal.z(), result.source_model.ground_offset);
+  const OverlapMeasure overlap = measure_overlap(source, target, result.transform, source_ground);
+  std::printf(" | overlap %.2f (unmoved %.2f) at %.1f m", overlap.transformed, overlap.identity, overlap.distance);
   if (ground_truth) {
     const double rte = translation_error(result.transform, *ground_truth);
     const double rre = rotation_error_degrees(result.transform, *ground_truth);
@@ -101,6 +107,7 @@ void run(const RegisterCommandOptions& options) {
     context.load_ms = load_ms;
     context.total_ms = total_ms;
     context.ground_truth = ground_truth;
+    context.overlap = overlap;
     const std::filesystem::path folder(options.out);
     write_registration_report((folder / "report.json").string(), result, context);
     write_point_cloud((folder / "merged.ply").string(), merge_aligned_clouds(source, target, result.transform));

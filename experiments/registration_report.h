@@ -15,6 +15,22 @@
 namespace quadrix {
 
 /// Context of a run that the report records beside the RegistrationResult.
+/// How much of the source lands on the target, for pairs without ground truth: the fraction of
+/// source points standing above the source's ground (when the model has one) that have a target
+/// point within `distance` after the transform, beside the same fraction without moving (identity).
+struct OverlapMeasure {
+  double distance = 0.3;        ///< a source point within this of a target point overlaps, m
+  double transformed = 0.0;     ///< overlapping fraction after the registration's transform, [0, 1]
+  double identity = 0.0;        ///< overlapping fraction without moving the source, [0, 1]
+  std::size_t sampled = 0;      ///< source points tested (an even stride of at most 20,000 above the ground)
+};
+
+/// Measures OverlapMeasure with a voxel hash of the target (cells of `distance`); points within
+/// 0.5 m of `source_ground` (n . x + offset = 0 with `source_ground` = (n, offset)) are skipped
+/// when it is given, since a shared ground plane overlaps under any motion along it.
+OverlapMeasure measure_overlap(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,
+                               const std::optional<Eigen::Vector4d>& source_ground = std::nullopt, double distance = 0.3);
+
 struct RegistrationReportContext {
   std::string source_path;                        ///< source cloud file
   std::string target_path;                        ///< target cloud file
@@ -24,6 +40,7 @@ struct RegistrationReportContext {
   double load_ms = 0.0;                           ///< time to read both files, ms
   double total_ms = 0.0;                          ///< files loaded -> transform: reading + register_clouds, ms
   std::optional<Eigen::Isometry3d> ground_truth;  ///< T_gt mapping source into target, when known
+  std::optional<OverlapMeasure> overlap;           ///< measure_overlap of the result, when measured
 };
 
 /// The report as a JSON document (pretty-printed). Keys: "transform" (4x4 row-major list of lists),
@@ -32,7 +49,8 @@ struct RegistrationReportContext {
 /// selection, "registration" = register_clouds' own total), "counts", "candidates" (one object per
 /// level: level, threshold_m, clique_size, refinement_status, valid, selected, score, pair_count,
 /// filtered_count, term_count, factor_count, transform, note), "best_to_second_ratio", "input"
-/// (paths and presets), and with a ground truth "ground_truth" {transform, rte_m, rre_deg, success}.
+/// (paths and presets), with a ground truth "ground_truth" {transform, rte_m, rre_deg, success}, and
+/// with a measured overlap "overlap" {distance_m, transformed, identity, sampled_points}.
 std::string registration_report_json(const RegistrationResult& result, const RegistrationReportContext& context);
 
 /// Writes registration_report_json atomically to `path`.

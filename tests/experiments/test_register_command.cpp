@@ -271,6 +271,32 @@ TEST(RegistrationReport, JsonFollowsTheContractAndPicturesAreWritten) {
   EXPECT_EQ(read_point_cloud((folder / "merged.ply").string()).size(), 1000u);
 }
 
+TEST(RegistrationReport, OverlapCountsSourcePointsLandingOnTheTargetAboveTheGround) {
+  // Target: 3000 points of a 20 m box above a ground at z = 0, plus 2000 ground points. Source: the
+  // same scene seen from 8 m away and rotated 30 deg, so the right transform overlaps everything.
+  PointCloud target;
+  target.positions.resize(3, 5000);
+  target.positions.leftCols(3000) = (Eigen::Matrix3Xf::Random(3, 3000).array() + 1.0f) * 10.0f;
+  target.positions.leftCols(3000).row(2).array() += 1.0f;  // at least 1 m above the ground
+  target.positions.rightCols(2000) = Eigen::Matrix3Xf::Random(3, 2000) * 20.0f;
+  target.positions.rightCols(2000).row(2).setZero();
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
+  transform.linear() = Eigen::AngleAxisd(M_PI / 6.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  transform.translation() = Eigen::Vector3d(8.0, 0.0, 0.0);
+  PointCloud source;
+  source.positions = (transform.inverse().cast<float>() * target.positions).eval();
+  const OverlapMeasure right = measure_overlap(source, target, transform, Eigen::Vector4d(0, 0, 1, 0));
+  EXPECT_EQ(right.sampled, 3000u);  // the ground points are skipped
+  EXPECT_DOUBLE_EQ(right.transformed, 1.0);
+  EXPECT_LT(right.identity, 0.5);  // 3000 random points in 8000 m^3 rarely sit within 0.3 m of each other
+  const OverlapMeasure with_ground = measure_overlap(source, target, transform);
+  EXPECT_EQ(with_ground.sampled, 5000u);
+  Eigen::Isometry3d off = transform;
+  off.translation().x() += 1.0;  // 1 m off: the sparse box no longer lines up
+  EXPECT_LT(measure_overlap(source, target, off, Eigen::Vector4d(0, 0, 1, 0)).transformed, 0.5);
+  EXPECT_THROW(measure_overlap(source, target, transform, std::nullopt, 0.0), Error);
+}
+
 TEST(RegistrationReport, BirdsEyePictureFramesBothCloudsWhereverTheyAre) {
   // A 30 m x 10 m scene 200 m east of the target origin, plus 1% stray points 5 km away; the
   // source is the same scene, moved by the registration's transform onto the target.
