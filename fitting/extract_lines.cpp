@@ -1,11 +1,14 @@
 // Line extraction (paper §"Quadric Extraction", step 1(c)): RANSAC on each cluster left after
 // ground and planes; a line must dominate its cluster, be long enough, and (by default) stand
-// roughly upright like a pole. Hypotheses are refined by PCA of their inliers.
+// roughly upright like a pole. Hypotheses are refined by PCA of their inliers. Before the lines, a
+// cluster standing on a narrow upright stem under a round crown is split into the paper's trunk
+// (elliptic cylinder) and vegetation (ellipsoid) key objects.
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
 
 namespace quadrix {
@@ -92,6 +95,68 @@ std::vector<Element> extract_lines(const Eigen::Matrix3Xd& points, const std::ve
     remaining = std::move(off_line);
   }
   return lines;
+}
+
+bool separate_trunk(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
+                    const TrunkOptions& options, const Eigen::Vector3d& up_axis, std::vector<std::uint32_t>& trunk,
+                    std::vector<std::uint32_t>& crown) {
+  trunk.clear();
+  crown.clear();
+  if (static_cast<int>(cluster.size()) < options.minimum_points + options.minimum_crown_points ||
+      !(options.slice_height > 0.0))
+    return false;
+  // Height along the up axis and horizontal coordinates in the plane across it.
+  const Eigen::Vector3d up = up_axis.normalized();
+  const Eigen::Vector3d across = (std::abs(up.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(up).normalized();
+  const Eigen::Vector3d across_too = up.cross(across);
+  std::vector<double> height(cluster.size());
+  std::vector<Eigen::Vector2d> horizontal(cluster.size());
+  for (std::size_t i = 0; i < cluster.size(); ++i) {
+    const Eigen::Vector3d p = points.col(cluster[i]);
+    height[i] = p.dot(up);
+    horizontal[i] = Eigen::Vector2d(p.dot(across), p.dot(across_too));
+  }
+  std::vector<std::size_t> order(cluster.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return height[a] < height[b]; });
+  // Grow the stem slice by slice from the foot: a slice joins while all its points lie within
+  // maximum_radius of the stem's centre line (the mean of the stem so far, else of the slice).
+  const double foot = height[order.front()];
+  Eigen::Vector2d stem_sum = Eigen::Vector2d::Zero();
+  std::size_t stem_count = 0, next = 0;
+  double stem_top = foot;
+  const double radius_squared = options.maximum_radius * options.maximum_radius;
+  while (next < order.size()) {
+    const double slice_top = stem_top + options.slice_height;
+    std::size_t end = next;
+    Eigen::Vector2d slice_sum = Eigen::Vector2d::Zero();
+    while (end < order.size() && height[order[end]] < slice_top) slice_sum += horizontal[order[end++]];
+    if (end > next) {
+      const Eigen::Vector2d centre = stem_count > 0 ? Eigen::Vector2d(stem_sum / static_cast<double>(stem_count))
+                                                    : Eigen::Vector2d(slice_sum / static_cast<double>(end - next));
+      bool narrow = true;
+      for (std::size_t k = next; k < end && narrow; ++k) narrow = (horizontal[order[k]] - centre).squaredNorm() <= radius_squared;
+      if (!narrow) break;
+      stem_sum += slice_sum;
+      stem_count += end - next;
+    }
+    next = end;
+    stem_top = slice_top;
+  }
+  if (next >= order.size() || stem_top - foot < options.minimum_height || static_cast<int>(stem_count) < options.minimum_points ||
+      static_cast<int>(order.size() - next) < options.minimum_crown_points)
+    return false;
+  // The crown spreads in both horizontal directions (an arm or a sign does not).
+  detail::Moments crown_moments;
+  for (std::size_t k = next; k < order.size(); ++k)
+    crown_moments.add(Eigen::Vector3d(horizontal[order[k]].x(), horizontal[order[k]].y(), 0.0));
+  const Eigen::Matrix2d spread = crown_moments.covariance().topLeftCorner<2, 2>();
+  const double smaller_variance = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(spread, Eigen::EigenvaluesOnly).eigenvalues()(0);
+  if (smaller_variance < options.minimum_crown_spread * options.minimum_crown_spread) return false;
+  for (std::size_t k = 0; k < order.size(); ++k) (k < next ? trunk : crown).push_back(cluster[order[k]]);
+  std::sort(trunk.begin(), trunk.end());
+  std::sort(crown.begin(), crown.end());
+  return true;
 }
 
 }  // namespace quadrix

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <queue>
 #include <random>
 #include <unordered_map>
@@ -80,6 +81,40 @@ std::vector<std::uint32_t> detail::dominant_cluster_plane(const Eigen::Matrix3Xd
       !plane_is_large_enough(plane_moments, static_cast<std::size_t>(options.minimum_plane_voxels), options))
     return {};
   return plane;
+}
+
+std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& points,
+                                                       const std::vector<std::uint32_t>& cluster,
+                                                       const PlaneOptions& options, const Eigen::Vector3d& up) {
+  // A cluster's walls are the parts a spinning LiDAR saw of them (a narrow band of beams, broken by
+  // occlusion), so they get their own, smaller size tests.
+  PlaneOptions piece = options;
+  piece.minimum_plane_width = options.cluster_plane_width;
+  piece.minimum_plane_area = options.cluster_plane_area;
+  piece.merge_distance = options.cluster_plane_distance;
+  std::vector<std::vector<std::uint32_t>> planes;
+  std::vector<std::uint32_t> rest = cluster;
+  std::sort(rest.begin(), rest.end());
+  std::size_t covered = 0;
+  while (static_cast<int>(rest.size()) >= options.minimum_plane_points) {
+    std::vector<std::uint32_t> plane = detail::dominant_cluster_plane(points, rest, piece, options.cluster_plane_share);
+    if (plane.empty()) break;
+    double lowest = 1e300, highest = -1e300;
+    for (const std::uint32_t index : plane) {
+      const double height = up.dot(points.col(index));
+      lowest = std::min(lowest, height);
+      highest = std::max(highest, height);
+    }
+    if (highest - lowest < options.cluster_plane_height) break;
+    std::vector<std::uint32_t> left;
+    std::set_difference(rest.begin(), rest.end(), plane.begin(), plane.end(), std::back_inserter(left));
+    rest = std::move(left);
+    covered += plane.size();
+    planes.push_back(std::move(plane));
+  }
+  if (static_cast<double>(covered) < options.cluster_plane_coverage * static_cast<double>(cluster.size())) return {};
+  std::stable_sort(planes.begin(), planes.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  return planes;
 }
 
 namespace {

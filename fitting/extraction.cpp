@@ -136,41 +136,42 @@ void set_ground(ExtractionResult& result, const Eigen::Matrix3Xd& points, const 
   result.ground_offset = -normal.dot(moments.mean());
 }
 
-// Lines then objects from the clusters (paper step 1(c) and the geometry-only key objects).
+// Trunks and crowns, lines, walls and objects from the clusters (paper step 1(c) and the
+// geometry-only key objects): a tree gives its trunk and crown; otherwise RANSAC lines (poles);
+// a cluster without a pole that is mostly planes gives those planes (walls the voxels missed);
+// what is left of a cluster is an object.
 void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::vector<std::uint32_t>>& clusters,
                        const ExtractionOptions& options, const Eigen::Vector3d& up, std::vector<Element>& lines,
                        std::vector<Element>& objects) {
-  std::vector<std::vector<Element>> lines_per_cluster(clusters.size());
-  std::vector<std::vector<std::uint32_t>> rest_per_cluster(clusters.size());
-  std::vector<std::vector<std::uint32_t>> plane_per_cluster(clusters.size());
+  std::vector<std::vector<Element>> elements_per_cluster(clusters.size());
   tbb::parallel_for(std::size_t(0), clusters.size(), [&](std::size_t c) {
-    lines_per_cluster[c] = extract_lines(points, clusters[c], options.lines, up, rest_per_cluster[c]);
-    // A cluster that is mostly one wall (voxel planes missed it) gives that wall as a plane.
-    if (lines_per_cluster[c].empty()) {
-      plane_per_cluster[c] = detail::dominant_cluster_plane(points, rest_per_cluster[c], options.planes, 0.65);
-      if (!plane_per_cluster[c].empty()) {
-        std::vector<std::uint32_t> rest;
-        std::set_difference(rest_per_cluster[c].begin(), rest_per_cluster[c].end(), plane_per_cluster[c].begin(),
-                            plane_per_cluster[c].end(), std::back_inserter(rest));
-        rest_per_cluster[c] = std::move(rest);
+    std::vector<Element>& found = elements_per_cluster[c];
+    const auto add = [&](ElementClass element_class, std::vector<std::uint32_t>&& indices) {
+      Element element;
+      element.element_class = element_class;
+      element.point_indices = std::move(indices);
+      found.push_back(std::move(element));
+    };
+    std::vector<std::uint32_t> trunk, crown;
+    if (options.trunks.enabled && separate_trunk(points, clusters[c], options.trunks, up, trunk, crown)) {
+      add(ElementClass::Trunk, std::move(trunk));
+      add(ElementClass::Vegetation, std::move(crown));
+      return;
+    }
+    std::vector<std::uint32_t> rest;
+    found = extract_lines(points, clusters[c], options.lines, up, rest);
+    if (found.empty()) {
+      for (std::vector<std::uint32_t>& plane : cluster_planes(points, rest, options.planes, up)) {
+        std::vector<std::uint32_t> left;
+        std::set_difference(rest.begin(), rest.end(), plane.begin(), plane.end(), std::back_inserter(left));
+        rest = std::move(left);
+        add(ElementClass::Plane, std::move(plane));
       }
     }
+    if (static_cast<int>(rest.size()) >= options.clusters.minimum_points) add(ElementClass::Object, std::move(rest));
   });
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
-    for (Element& line : lines_per_cluster[c]) lines.push_back(std::move(line));
-    if (!plane_per_cluster[c].empty()) {
-      Element plane;
-      plane.element_class = ElementClass::Plane;
-      plane.point_indices = std::move(plane_per_cluster[c]);
-      objects.push_back(std::move(plane));
-    }
-    if (static_cast<int>(rest_per_cluster[c].size()) >= options.clusters.minimum_points) {
-      Element object;
-      object.element_class = ElementClass::Object;
-      object.point_indices = std::move(rest_per_cluster[c]);
-      objects.push_back(std::move(object));
-    }
-  }
+  for (std::vector<Element>& found : elements_per_cluster)
+    for (Element& element : found) (element.element_class == ElementClass::Line ? lines : objects).push_back(std::move(element));
 }
 
 }  // namespace

@@ -82,6 +82,12 @@ struct PlaneOptions {
   double minimum_plane_width = 0.5;    ///< second-largest statistical scale s_s,2 of a plane at least this, m
   double minimum_plane_area = 2.0;     ///< product of the two largest statistical scales s_s,1 s_s,2 (the plane's V_a) at least this, m^2
   int cgal_neighbours = 12;            ///< CgalRegionGrowing: k nearest neighbours for normals and growing
+  double cluster_plane_coverage = 0.65;  ///< a cluster without a pole whose RANSAC planes together hold at least this fraction of it is split into those planes (walls whose voxels all straddle an edge)
+  double cluster_plane_share = 0.25;     ///< each of those planes holds at least this fraction of the cluster points no earlier plane took
+  double cluster_plane_distance = 0.1;   ///< point-to-plane distance of those planes' points, m (tighter than merge_distance: points near an edge between two walls stay with the other wall)
+  double cluster_plane_width = 0.3;      ///< minimum_plane_width for those planes, m
+  double cluster_plane_area = 0.3;       ///< minimum_plane_area for those planes, m^2
+  double cluster_plane_height = 1.5;     ///< those planes span at least this along the up axis, m (walls; car sides, roofs and low clutter do not)
 };
 
 /// Euclidean clustering of the points left after ground and planes (paper: clusters of TRAVEL).
@@ -105,6 +111,21 @@ struct LineOptions {
   double max_tilt_deg = 30.0;          ///< line direction at most this far from the up axis (poles), degrees; 90 accepts any
   int maximum_lines_per_cluster = 2;   ///< lines taken from one cluster (pole + arm)
   std::uint64_t seed = 42;             ///< RANSAC random seed (deterministic)
+};
+
+/// Trunks under crowns (geometry-only mode; the paper's trunk and vegetation classes without
+/// labels): a cluster whose foot is a narrow upright stem and whose top is a crown spreading in
+/// both horizontal directions gives a Trunk element (the stem, fitted as an elliptic cylinder) and
+/// a Vegetation element (the crown, an ellipsoid). Lamp posts (arm and lamp are thin) and sign
+/// posts (the sign is flat) keep their line.
+struct TrunkOptions {
+  bool enabled = true;                 ///< look for a trunk in every cluster before its lines
+  double slice_height = 0.25;          ///< the stem is grown upward from the cluster's foot in slices this tall, m
+  double maximum_radius = 0.5;         ///< every stem point lies within this horizontal distance of the stem's centre line, m
+  double minimum_height = 1.0;         ///< the stem is at least this tall, m
+  int minimum_points = 15;             ///< points a stem needs
+  int minimum_crown_points = 30;       ///< points the crown (everything above the stem) needs
+  double minimum_crown_spread = 0.2;   ///< the crown's smaller horizontal standard deviation at least this, m (a crown is round, a sign or an arm is thin)
 };
 
 /// CGAL Efficient RANSAC for static scans (Schnabel et al. 2007). Every parameter is set
@@ -148,6 +169,7 @@ struct ExtractionOptions {
   PlaneOptions planes;                 ///< plane extraction
   ClusterOptions clusters;             ///< clustering
   LineOptions lines;                   ///< line RANSAC
+  TrunkOptions trunks;                 ///< trunks separated from their crowns
   ShapeDetectionOptions shapes;        ///< static-scan shape detection
 };
 
@@ -210,6 +232,21 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(const Eigen::Matrix3X
 std::vector<Element> extract_lines(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
                                    const LineOptions& options, const Eigen::Vector3d& up,
                                    std::vector<std::uint32_t>& remaining);
+
+/// A trunk under a crown in one cluster (TrunkOptions): on success `trunk` gets the stem points,
+/// `crown` the rest, and the result is true; otherwise both are empty and the result is false.
+bool separate_trunk(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
+                    const TrunkOptions& options, const Eigen::Vector3d& up, std::vector<std::uint32_t>& trunk,
+                    std::vector<std::uint32_t>& crown);
+
+/// Planes of one cluster (paper step 1(b) for walls the voxels missed): RANSAC planes taken one
+/// after the other from the points no earlier plane holds, each holding at least
+/// options.cluster_plane_share of them and passing the eigenvalue-ratio and size tests. Returned
+/// (largest first) when together they hold at least options.cluster_plane_coverage of the
+/// cluster; otherwise empty. Each plane spans at least options.cluster_plane_height along `up`.
+std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& points,
+                                                       const std::vector<std::uint32_t>& cluster,
+                                                       const PlaneOptions& options, const Eigen::Vector3d& up);
 
 /// CGAL Efficient RANSAC shapes (static scans). `normals` may be empty: they are then estimated
 /// with CGAL jet fitting and oriented toward options.sensor_origin.
