@@ -444,18 +444,44 @@ BenchRunInfo read_bench_run_info(const std::string& folder) {
   return info;
 }
 
+namespace {
+
+// The " --method a,b" part of a run's options text, and the text without it: runs of other methods
+// over the same tasks (same pairs, trials, seed and options) merge into one run of all methods.
+std::pair<std::string, std::string> split_method_option(const std::string& options_text) {
+  const std::string flag = " --method ";
+  const std::size_t begin = options_text.find(flag);
+  if (begin == std::string::npos) return {options_text, ""};
+  const std::size_t value = begin + flag.size();
+  const std::size_t end = std::min(options_text.find(' ', value), options_text.size());
+  return {options_text.substr(0, begin) + options_text.substr(end), options_text.substr(value, end - value)};
+}
+
+}  // namespace
+
 std::vector<MethodSummary> merge_bench_outputs(const std::vector<std::string>& folders, const std::string& out_folder) {
   if (folders.empty()) throw Error("bench merge: no folder given");
   BenchRunInfo merged = read_bench_run_info(folders.front());
+  const std::string common_options = split_method_option(merged.options_text).first;
   std::vector<BenchRow> rows;
   for (const std::string& folder : folders) {
     const BenchRunInfo info = read_bench_run_info(folder);
-    if (info.options_text != merged.options_text || info.methods != merged.methods || info.task_count != merged.task_count ||
-        info.shard_count != merged.shard_count || info.title != merged.title)
+    if (split_method_option(info.options_text).first != common_options || info.task_count != merged.task_count ||
+        info.title != merged.title)
       throw file_error((fs::path(folder) / "run.json").string(),
-                       "belongs to another run (options, methods, task count or shard count differ from " + folders.front() + ")");
+                       "belongs to another run (options other than --method, title or task count differ from " +
+                           folders.front() + ")");
+    for (const std::string& method : info.methods)
+      if (std::find(merged.methods.begin(), merged.methods.end(), method) == merged.methods.end())
+        merged.methods.push_back(method);
     const std::vector<BenchRow> part = read_bench_rows_csv((fs::path(folder) / "pairs.csv").string());
     rows.insert(rows.end(), part.begin(), part.end());
+  }
+  if (!split_method_option(merged.options_text).second.empty()) {
+    std::string methods;
+    for (const std::string& method : merged.methods) methods += (methods.empty() ? "" : ",") + method;
+    const std::size_t value = merged.options_text.find(" --method ") + 10;
+    merged.options_text.replace(value, split_method_option(merged.options_text).second.size(), methods);
   }
   const auto method_rank = [&](const std::string& method) {
     return static_cast<std::size_t>(std::find(merged.methods.begin(), merged.methods.end(), method) - merged.methods.begin());
@@ -477,7 +503,7 @@ std::vector<MethodSummary> merge_bench_outputs(const std::vector<std::string>& f
       }
   if (missing_count)
     throw Error("bench merge: " + std::to_string(missing_count) + " task rows are missing (task/method: " + missing +
-                (missing_count > 10 ? ", ..." : "") + "); give every shard folder of the run");
+                (missing_count > 10 ? ", ..." : "") + "); give every shard folder of every method");
   merged.shard_index = 1;
   merged.shard_count = 1;
   return write_bench_outputs(out_folder, rows, merged);

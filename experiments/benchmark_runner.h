@@ -183,9 +183,11 @@ std::vector<MethodSummary> write_bench_outputs(const std::string& folder, const 
 /// Reads run.json of an output folder; throws quadrix::Error naming the file.
 BenchRunInfo read_bench_run_info(const std::string& folder);
 
-/// Merges shard folders: checks their options agree and that every task of the run is present
-/// exactly once, then writes the outputs of the whole run into `out_folder` (shard 1/1). Throws
-/// quadrix::Error naming the folder that disagrees or the missing tasks.
+/// Merges shard folders, and runs of different methods over the same tasks (options equal but for
+/// --method; e.g. the slow baselines once, Quadrix again after a change): checks that every task of
+/// every method is present exactly once, then writes the outputs of the whole run into `out_folder`
+/// (shard 1/1, methods in first-seen order). Throws quadrix::Error naming the folder that disagrees
+/// or the missing tasks.
 std::vector<MethodSummary> merge_bench_outputs(const std::vector<std::string>& folders, const std::string& out_folder);
 
 /// The SVG plots of write_bench_outputs, for reuse: success rate per difficulty bin and method.

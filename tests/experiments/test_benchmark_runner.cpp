@@ -139,6 +139,48 @@ TEST_F(BenchFolder, ThreeShardsMergedGiveExactlyTheOutputsOfOneRun) {
   }
 }
 
+TEST_F(BenchFolder, RunsOfDifferentMethodsOverTheSameTasksMergeIntoOneRun) {
+  register_bench_method("fake", fake_method);
+  register_bench_method("fake-slow", [](const BenchMethodInput& input) {
+    BenchMethodOutput output = fake_method(input);
+    output.timings_ms["total"] *= 4.0;
+    return output;
+  });
+  const std::vector<BenchPair> pairs = tiny_pairs(folder_, 5);
+  BenchOptions options;
+  options.yaw_range_degrees = 90.0;
+  options.trials = 2;
+  options.seed = 3;
+  options.progress = false;
+  BenchRunInfo info;
+  info.title = "method merge test";
+  info.task_count = pairs.size() * 2;
+  const auto run = [&](const std::vector<std::string>& methods, const std::string& folder, unsigned seed) {
+    options.methods = methods;
+    options.seed = seed;
+    info.methods = methods;
+    std::string list;
+    for (const std::string& method : methods) list += (list.empty() ? "" : ",") + method;
+    info.options_text = "--pairs tiny.tsv --method " + list + " --preset auto --seed " + std::to_string(seed);
+    write_bench_outputs((folder_ / folder).string(), run_benchmark(pairs, options), info);
+    return (folder_ / folder).string();
+  };
+  const std::string whole = run({"fake", "fake-slow"}, "both", 3);
+  const std::string fast = run({"fake"}, "fast", 3);
+  const std::string slow = run({"fake-slow"}, "slow", 3);
+  merge_bench_outputs({fast, slow}, (folder_ / "merged").string());
+  for (const char* file : {"pairs.csv", "summary.md", "run.json", "success_by_difficulty.svg", "error_cdf.svg", "time_per_stage.svg"})
+    EXPECT_EQ(read_text(fs::path(whole) / file), read_text(folder_ / "merged" / file)) << file;
+  // Another seed is another run: refused, naming the folder.
+  const std::string other = run({"fake-slow"}, "other-seed", 4);
+  try {
+    merge_bench_outputs({fast, other}, (folder_ / "bad").string());
+    FAIL() << "runs with different seeds were merged";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("other-seed"), std::string::npos) << error.what();
+  }
+}
+
 TEST_F(BenchFolder, RowsRoundTripThroughCsvExactly) {
   register_bench_method("fake", fake_method);
   BenchOptions options;
