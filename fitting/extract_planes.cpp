@@ -83,6 +83,40 @@ std::vector<std::uint32_t> detail::dominant_cluster_plane(const Eigen::Matrix3Xd
   return plane;
 }
 
+namespace {
+
+// The cluster's indices in ascending order.
+std::vector<std::uint32_t> sorted_copy(const std::vector<std::uint32_t>& cluster) {
+  std::vector<std::uint32_t> sorted = cluster;
+  std::sort(sorted.begin(), sorted.end());
+  return sorted;
+}
+
+// Whether the planes are faces of one convex solid: every plane has (nearly) all the cluster on
+// one side of it, and one of them is a roof (normal within 30 degrees of up). Walls around a recess
+// are not: they stand upright, and a jamb has the facade on one side and the back wall on the other.
+bool encloses_a_solid(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
+                      const std::vector<std::vector<std::uint32_t>>& planes, double distance, const Eigen::Vector3d& up) {
+  const double tolerance = 0.05 * static_cast<double>(cluster.size());
+  bool has_roof = false;
+  for (const std::vector<std::uint32_t>& plane : planes) {
+    detail::Moments moments;
+    for (const std::uint32_t index : plane) moments.add(points.col(index));
+    const Eigen::Vector3d normal = detail::principal_axes(moments.covariance()).vectors.col(0), centre = moments.mean();
+    std::size_t in_front = 0, behind = 0;
+    for (const std::uint32_t index : cluster) {
+      const double offset = normal.dot(points.col(index) - centre);
+      in_front += offset > distance;
+      behind += offset < -distance;
+    }
+    if (static_cast<double>(std::min(in_front, behind)) > tolerance) return false;
+    has_roof = has_roof || std::abs(normal.dot(up)) > std::cos(30.0 * 3.14159265358979323846 / 180.0);
+  }
+  return has_roof;
+}
+
+}  // namespace
+
 std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& points,
                                                        const std::vector<std::uint32_t>& cluster,
                                                        const PlaneOptions& options, const Eigen::Vector3d& up) {
@@ -93,19 +127,11 @@ std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& p
   piece.minimum_plane_area = options.cluster_plane_area;
   piece.merge_distance = options.cluster_plane_distance;
   std::vector<std::vector<std::uint32_t>> planes;
-  std::vector<std::uint32_t> rest = cluster;
-  std::sort(rest.begin(), rest.end());
+  std::vector<std::uint32_t> rest = sorted_copy(cluster);
   std::size_t covered = 0;
   while (static_cast<int>(rest.size()) >= options.minimum_plane_points) {
     std::vector<std::uint32_t> plane = detail::dominant_cluster_plane(points, rest, piece, options.cluster_plane_share);
     if (plane.empty()) break;
-    double lowest = 1e300, highest = -1e300;
-    for (const std::uint32_t index : plane) {
-      const double height = up.dot(points.col(index));
-      lowest = std::min(lowest, height);
-      highest = std::max(highest, height);
-    }
-    if (highest - lowest < options.cluster_plane_height) break;
     std::vector<std::uint32_t> left;
     std::set_difference(rest.begin(), rest.end(), plane.begin(), plane.end(), std::back_inserter(left));
     rest = std::move(left);
@@ -113,6 +139,14 @@ std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& p
     planes.push_back(std::move(plane));
   }
   if (static_cast<double>(covered) < options.cluster_plane_coverage * static_cast<double>(cluster.size())) return {};
+  if (planes.size() >= 2 && encloses_a_solid(points, cluster, planes, piece.merge_distance, up.normalized())) {
+    // A car or a box: its faces are planes, but it is one object. Only a wall holding most of the
+    // cluster (with the full size tests) is taken from it.
+    std::vector<std::uint32_t> wall =
+        detail::dominant_cluster_plane(points, sorted_copy(cluster), options, options.cluster_plane_coverage);
+    if (wall.empty()) return {};
+    return {std::move(wall)};
+  }
   std::stable_sort(planes.begin(), planes.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
   return planes;
 }

@@ -87,7 +87,6 @@ struct PlaneOptions {
   double cluster_plane_distance = 0.1;   ///< point-to-plane distance of those planes' points, m (tighter than merge_distance: points near an edge between two walls stay with the other wall)
   double cluster_plane_width = 0.3;      ///< minimum_plane_width for those planes, m
   double cluster_plane_area = 0.3;       ///< minimum_plane_area for those planes, m^2
-  double cluster_plane_height = 1.5;     ///< those planes span at least this along the up axis, m (walls; car sides, roofs and low clutter do not)
 };
 
 /// Euclidean clustering of the points left after ground and planes (paper: clusters of TRAVEL).
@@ -243,7 +242,9 @@ bool separate_trunk(const Eigen::Matrix3Xd& points, const std::vector<std::uint3
 /// after the other from the points no earlier plane holds, each holding at least
 /// options.cluster_plane_share of them and passing the eigenvalue-ratio and size tests. Returned
 /// (largest first) when together they hold at least options.cluster_plane_coverage of the
-/// cluster; otherwise empty. Each plane spans at least options.cluster_plane_height along `up`.
+/// cluster; otherwise empty. Planes that enclose a convex solid (every plane with the cluster on
+/// one side, one of them a roof facing `up`: a car, a box) are one object: then only a plane
+/// holding cluster_plane_coverage of it with the full size tests is returned, if any.
 std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& points,
                                                        const std::vector<std::uint32_t>& cluster,
                                                        const PlaneOptions& options, const Eigen::Vector3d& up);

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <random>
@@ -225,6 +226,124 @@ TEST(Extraction, RansacLineRejectsBlobsAndAcceptsPoles) {
   EXPECT_GE(lines[0].point_indices.size(), 190u);
   EXPECT_TRUE(extract_lines(points, blob, options, Eigen::Vector3d::UnitZ(), remaining).empty());
   EXPECT_EQ(remaining.size(), 200u);
+}
+
+// Points on the sensor-facing half of an upright cylinder (sensor at the origin), bottom to top.
+void add_stem(std::vector<Eigen::Vector3d>& points, std::vector<int>& truth, int id, const Eigen::Vector2d& axis,
+              double radius, double bottom, double top, int count, std::mt19937_64& engine) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double facing = std::atan2(-axis.y(), -axis.x());
+  for (int i = 0; i < count; ++i) {
+    const double phi = facing + (unit(engine) - 0.5) * kPi;
+    points.emplace_back(axis.x() + radius * std::cos(phi), axis.y() + radius * std::sin(phi),
+                        bottom + (top - bottom) * unit(engine));
+    truth.push_back(id);
+  }
+}
+
+std::vector<std::uint32_t> all_indices(std::size_t count) {
+  std::vector<std::uint32_t> indices(count);
+  for (std::uint32_t i = 0; i < count; ++i) indices[i] = i;
+  return indices;
+}
+
+Eigen::Matrix3Xd to_matrix(const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Matrix3Xd matrix(3, static_cast<Eigen::Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) matrix.col(static_cast<Eigen::Index>(i)) = points[i];
+  return matrix;
+}
+
+TEST(Extraction, TreeGivesItsTrunkAndCrownButPostsKeepTheirLine) {
+  std::mt19937_64 engine(21);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const auto count_truth = [](const std::vector<std::uint32_t>& indices, const std::vector<int>& truth, int id) {
+    return static_cast<std::size_t>(std::count_if(indices.begin(), indices.end(), [&](std::uint32_t i) { return truth[i] == id; }));
+  };
+  // Tree 8 m away: a 0.2 m trunk up to 2.8 m under the visible shell of a 1.6 x 1.4 x 1.8 m crown.
+  std::vector<Eigen::Vector3d> tree;
+  std::vector<int> tree_truth;
+  add_stem(tree, tree_truth, 0, {8.0, 0.0}, 0.2, 0.0, 2.8, 300, engine);
+  for (int i = 0; i < 800; ++i) {
+    Eigen::Vector3d direction(gauss(engine), gauss(engine), gauss(engine));
+    direction.normalize();
+    if (direction.x() > 0.3) direction.x() = -direction.x();  // the far side is hidden
+    tree.push_back(Eigen::Vector3d(8.0, 0.0, 4.4) + Eigen::Vector3d(1.6, 1.4, 1.8).cwiseProduct(direction));
+    tree_truth.push_back(1);
+  }
+  std::vector<std::uint32_t> trunk, crown;
+  const TrunkOptions options;
+  ASSERT_TRUE(separate_trunk(to_matrix(tree), all_indices(tree.size()), options, Eigen::Vector3d::UnitZ(), trunk, crown));
+  EXPECT_GE(count_truth(trunk, tree_truth, 0), 250u);          // most of the 300 trunk points (its top is among the crown's)
+  EXPECT_LE(trunk.size() - count_truth(trunk, tree_truth, 0), 20u);  // and little of the crown
+  EXPECT_GE(count_truth(crown, tree_truth, 1), 780u);          // nearly all of the 800 crown points
+  EXPECT_EQ(trunk.size() + crown.size(), tree.size());
+
+  // A lamp post with a horizontal arm and a sign post with a flat sign: no crown, no trunk.
+  std::vector<Eigen::Vector3d> lamp;
+  std::vector<int> lamp_truth;
+  add_stem(lamp, lamp_truth, 0, {6.0, 3.0}, 0.08, 0.0, 6.0, 300, engine);
+  for (int i = 0; i < 80; ++i) {
+    lamp.emplace_back(6.0, 3.0 - 1.8 * (i / 80.0), 5.8 + 0.03 * gauss(engine));
+    lamp_truth.push_back(1);
+  }
+  EXPECT_FALSE(separate_trunk(to_matrix(lamp), all_indices(lamp.size()), options, Eigen::Vector3d::UnitZ(), trunk, crown));
+  EXPECT_TRUE(trunk.empty() && crown.empty());
+  std::vector<Eigen::Vector3d> sign;
+  std::vector<int> sign_truth;
+  add_stem(sign, sign_truth, 0, {-5.0, 4.0}, 0.05, 0.0, 2.2, 150, engine);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int i = 0; i < 150; ++i) {  // a 1.2 x 0.9 m sign facing the street, 2.2-3.1 m up
+    sign.emplace_back(-5.0 + 0.01 * gauss(engine), 4.0 - 0.6 + 1.2 * unit(engine), 2.2 + 0.9 * unit(engine));
+    sign_truth.push_back(1);
+  }
+  EXPECT_FALSE(separate_trunk(to_matrix(sign), all_indices(sign.size()), options, Eigen::Vector3d::UnitZ(), trunk, crown));
+}
+
+TEST(Extraction, ClusterOfWallsIsSplitIntoItsPlanesButABlobIsNot) {
+  // A recessed entrance seen from the street (sensor at the origin, facade at y = 10): the back
+  // wall 3 m wide at y = 11.5, two 1.5 m jambs and a facade piece beside it, 2 m of each visible.
+  std::mt19937_64 engine(8);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int> truth;
+  const auto add = [&](int id, int count, const std::function<Eigen::Vector3d(double, double)>& at) {
+    for (int i = 0; i < count; ++i) {
+      points.push_back(at(unit(engine), unit(engine)) + Eigen::Vector3d(noise(engine), noise(engine), noise(engine)));
+      truth.push_back(id);
+    }
+  };
+  add(0, 900, [](double a, double b) { return Eigen::Vector3d(-1.5 + 3.0 * a, 11.5, 2.0 * b); });
+  add(1, 300, [](double a, double b) { return Eigen::Vector3d(-1.5, 10.0 + 1.5 * a, 2.0 * b); });
+  add(2, 300, [](double a, double b) { return Eigen::Vector3d(1.5, 10.0 + 1.5 * a, 2.0 * b); });
+  add(3, 500, [](double a, double b) { return Eigen::Vector3d(1.5 + 2.5 * a, 10.0, 2.0 * b); });
+  const Eigen::Matrix3Xd matrix = to_matrix(points);
+  const PlaneOptions options;
+  const auto planes = cluster_planes(matrix, all_indices(points.size()), options, Eigen::Vector3d::UnitZ());
+  ASSERT_GE(planes.size(), 3u);
+  std::set<int> walls;
+  std::size_t covered = 0;
+  for (const auto& plane : planes) {
+    std::map<int, std::size_t> votes;
+    for (const std::uint32_t index : plane) ++votes[truth[index]];
+    const auto best = std::max_element(votes.begin(), votes.end(), [](auto a, auto b) { return a.second < b.second; });
+    // Each plane also holds the other walls' points within 0.1 m of it (their edges: ~7% here).
+    EXPECT_GE(static_cast<double>(best->second), 0.85 * static_cast<double>(plane.size())) << "plane of wall " << best->first;
+    walls.insert(best->first);
+    covered += plane.size();
+  }
+  EXPECT_GE(walls.size(), 3u);  // back wall, facade piece and at least one jamb, each its own plane
+  EXPECT_GE(static_cast<double>(covered), 0.8 * static_cast<double>(points.size()));
+  for (std::size_t p = 1; p < planes.size(); ++p) EXPECT_LE(planes[p].size(), planes[p - 1].size());  // largest first
+
+  // An ellipsoid blob (a car, a bush) holds no wall.
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<Eigen::Vector3d> blob;
+  for (int i = 0; i < 2000; ++i) {
+    Eigen::Vector3d direction(gauss(engine), gauss(engine), gauss(engine));
+    blob.push_back(Eigen::Vector3d(2.2, 0.9, 0.75).cwiseProduct(direction.normalized()) + Eigen::Vector3d(8.0, 3.0, 0.0));
+  }
+  EXPECT_TRUE(cluster_planes(to_matrix(blob), all_indices(blob.size()), options, Eigen::Vector3d::UnitZ()).empty());
 }
 
 TEST(Extraction, UpAxisIsConfigurable) {
