@@ -189,53 +189,70 @@ DetectedShape fit_plane(const Eigen::Matrix3Xd& points, const std::vector<std::u
   return plane;
 }
 
-/// Least-squares circular cylinder of the members with a given unit axis: Kasa's algebraic circle
-/// fit in the plane across the axis, then Gauss-Newton on the geometric distance. False when the
-/// points do not define a circle.
+/// Least-squares circle (D = 2) or sphere (D = 3) through points given relative to their centroid:
+/// Kasa's algebraic fit (|q|^2 = 2 c . q + k), then Gauss-Newton on the geometric distance |q - c| - r.
+/// False when the points define none.
+template <int D>
+bool fit_round(const std::vector<Eigen::Matrix<double, D, 1>>& relative, Eigen::Matrix<double, D, 1>& centre, double& radius) {
+  using Row = Eigen::Matrix<double, D + 1, 1>;
+  using Square = Eigen::Matrix<double, D + 1, D + 1>;
+  if (relative.size() < static_cast<std::size_t>(D + 1)) return false;
+  Square normal_matrix = Square::Zero();
+  Row right_side = Row::Zero();
+  for (const auto& q : relative) {
+    Row row;
+    row << q, 1.0;
+    normal_matrix.noalias() += row * row.transpose();
+    right_side += row * q.squaredNorm();
+  }
+  const Row solution = normal_matrix.ldlt().solve(right_side);
+  centre = 0.5 * solution.template head<D>();
+  const double radius_squared = solution(D) + centre.squaredNorm();
+  if (!solution.allFinite() || !(radius_squared > 0.0)) return false;
+  radius = std::sqrt(radius_squared);
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    Square jtj = Square::Zero();
+    Row jtr = Row::Zero();
+    for (const auto& q : relative) {
+      const Eigen::Matrix<double, D, 1> d = q - centre;
+      const double length = d.norm();
+      if (!(length > 1e-12)) continue;
+      Row jacobian;
+      jacobian << -d / length, -1.0;
+      jtj.noalias() += jacobian * jacobian.transpose();
+      jtr += jacobian * (length - radius);
+    }
+    const Row step = jtj.ldlt().solve(-jtr);
+    if (!step.allFinite()) return false;
+    centre += step.template head<D>();
+    radius += step(D);
+    if (step.norm() < 1e-7) break;
+  }
+  return radius > 0.0 && std::isfinite(radius);
+}
+
+Eigen::Vector3d centroid_of(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const std::uint32_t i : members) sum += points.col(i);
+  return sum / static_cast<double>(std::max<std::size_t>(1, members.size()));
+}
+
+/// Least-squares circular cylinder of the members with a given unit axis: a circle fit in the
+/// plane across the axis. False when the points do not define a circle.
 bool fit_cylinder(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members, const Eigen::Vector3d& axis,
                   DetectedShape& cylinder) {
-  if (members.size() < 3) return false;
   const Eigen::Vector3d helper = std::abs(axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
   const Eigen::Vector3d u = axis.cross(helper).normalized(), v = axis.cross(u);
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  for (const std::uint32_t i : members) origin += points.col(i);
-  origin /= static_cast<double>(members.size());
+  const Eigen::Vector3d origin = centroid_of(points, members);
   std::vector<Eigen::Vector2d> planar;
   planar.reserve(members.size());
   for (const std::uint32_t i : members) {
     const Eigen::Vector3d d = points.col(i) - origin;
     planar.emplace_back(d.dot(u), d.dot(v));
   }
-  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d right_side = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector2d& q : planar) {
-    const Eigen::Vector3d row(q.x(), q.y(), 1.0);
-    normal_matrix.noalias() += row * row.transpose();
-    right_side += row * q.squaredNorm();
-  }
-  const Eigen::Vector3d solution = normal_matrix.ldlt().solve(right_side);
-  Eigen::Vector2d centre(0.5 * solution.x(), 0.5 * solution.y());
-  double radius_squared = solution.z() + centre.squaredNorm();
-  if (!solution.allFinite() || !(radius_squared > 0.0)) return false;
-  double radius = std::sqrt(radius_squared);
-  for (int iteration = 0; iteration < 10; ++iteration) {  // Gauss-Newton on (|q - c| - r)
-    Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d jtr = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector2d& q : planar) {
-      const Eigen::Vector2d d = q - centre;
-      const double length = d.norm();
-      if (!(length > 1e-12)) continue;
-      const Eigen::Vector3d jacobian(-d.x() / length, -d.y() / length, -1.0);
-      jtj.noalias() += jacobian * jacobian.transpose();
-      jtr += jacobian * (length - radius);
-    }
-    const Eigen::Vector3d step = jtj.ldlt().solve(-jtr);
-    if (!step.allFinite()) return false;
-    centre += step.head<2>();
-    radius += step.z();
-    if (step.norm() < 1e-7) break;
-  }
-  if (!(radius > 0.0) || !std::isfinite(radius)) return false;
+  Eigen::Vector2d centre;
+  double radius = 0.0;
+  if (!fit_round<2>(planar, centre, radius)) return false;
   cylinder.element_class = ElementClass::Cylinder;
   cylinder.type = QuadricType::CircularCylinder;
   cylinder.axis = axis;
@@ -244,43 +261,15 @@ bool fit_cylinder(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_
   return true;
 }
 
-/// Least-squares sphere of the members: algebraic fit, then Gauss-Newton on the geometric distance.
+/// Least-squares sphere of the members. False when the points do not define one.
 bool fit_sphere(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members, DetectedShape& sphere) {
-  if (members.size() < 4) return false;
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  for (const std::uint32_t i : members) origin += points.col(i);
-  origin /= static_cast<double>(members.size());
-  Eigen::Matrix4d normal_matrix = Eigen::Matrix4d::Zero();
-  Eigen::Vector4d right_side = Eigen::Vector4d::Zero();
-  for (const std::uint32_t i : members) {
-    const Eigen::Vector3d d = points.col(i) - origin;
-    const Eigen::Vector4d row(d.x(), d.y(), d.z(), 1.0);
-    normal_matrix.noalias() += row * row.transpose();
-    right_side += row * d.squaredNorm();
-  }
-  const Eigen::Vector4d solution = normal_matrix.ldlt().solve(right_side);
-  Eigen::Vector3d centre = 0.5 * solution.head<3>();
-  double radius_squared = solution.w() + centre.squaredNorm();
-  if (!solution.allFinite() || !(radius_squared > 0.0)) return false;
-  double radius = std::sqrt(radius_squared);
-  for (int iteration = 0; iteration < 10; ++iteration) {
-    Eigen::Matrix4d jtj = Eigen::Matrix4d::Zero();
-    Eigen::Vector4d jtr = Eigen::Vector4d::Zero();
-    for (const std::uint32_t i : members) {
-      const Eigen::Vector3d d = points.col(i) - origin - centre;
-      const double length = d.norm();
-      if (!(length > 1e-12)) continue;
-      const Eigen::Vector4d jacobian(-d.x() / length, -d.y() / length, -d.z() / length, -1.0);
-      jtj.noalias() += jacobian * jacobian.transpose();
-      jtr += jacobian * (length - radius);
-    }
-    const Eigen::Vector4d step = jtj.ldlt().solve(-jtr);
-    if (!step.allFinite()) return false;
-    centre += step.head<3>();
-    radius += step.w();
-    if (step.norm() < 1e-7) break;
-  }
-  if (!(radius > 0.0) || !std::isfinite(radius)) return false;
+  const Eigen::Vector3d origin = centroid_of(points, members);
+  std::vector<Eigen::Vector3d> relative;
+  relative.reserve(members.size());
+  for (const std::uint32_t i : members) relative.emplace_back(points.col(i) - origin);
+  Eigen::Vector3d centre;
+  double radius = 0.0;
+  if (!fit_round<3>(relative, centre, radius)) return false;
   sphere.element_class = ElementClass::Sphere;
   sphere.type = QuadricType::Sphere;
   sphere.point = origin + centre;

@@ -99,9 +99,15 @@ TEST(MonumentModelling, CountsAndPrimitivesAgainstTheTruth) {
         EXPECT_GE(p.element_share, 0.9);
         if (p.modelled && p.element_share >= 0.9) ++cylinders_held;
       }
-      if (p.name == "dome") EXPECT_EQ(p.fitted_type, QuadricType::Sphere);
-      if (p.name == "roof_ring") EXPECT_EQ(p.fitted_type, QuadricType::CircularCone);
-      if (p.truth_type == QuadricType::Plane && p.points >= 1000) EXPECT_EQ(p.fitted_type, QuadricType::Plane);
+      if (p.name == "dome") {
+        EXPECT_EQ(p.fitted_type, QuadricType::Sphere);
+      }
+      if (p.name == "roof_ring") {
+        EXPECT_EQ(p.fitted_type, QuadricType::CircularCone);
+      }
+      if (p.truth_type == QuadricType::Plane && p.points >= 1000) {
+        EXPECT_EQ(p.fitted_type, QuadricType::Plane);
+      }
     }
     EXPECT_EQ(cylinders_held, 33);  // so the 33 cylinder records are the 33 true cylinders, one each
     EXPECT_TRUE(result.model.has_ground);
