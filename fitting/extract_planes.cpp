@@ -132,6 +132,12 @@ std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& p
   while (static_cast<int>(rest.size()) >= options.minimum_plane_points) {
     std::vector<std::uint32_t> plane = detail::dominant_cluster_plane(points, rest, piece, options.cluster_plane_share);
     if (plane.empty()) break;
+    // Only upright walls get the smaller size tests; a tilted or level piece (terrain, a roof) needs the full ones.
+    detail::Moments moments;
+    for (const std::uint32_t index : plane) moments.add(points.col(index));
+    const bool upright = std::abs(detail::principal_axes(moments.covariance()).vectors.col(0).dot(up.normalized())) <
+                         std::sin(options.cluster_plane_tilt_deg * 3.14159265358979323846 / 180.0);
+    if (!upright && !detail::plane_is_large_enough(moments, static_cast<std::size_t>(options.minimum_plane_voxels), options)) break;
     std::vector<std::uint32_t> left;
     std::set_difference(rest.begin(), rest.end(), plane.begin(), plane.end(), std::back_inserter(left));
     rest = std::move(left);

@@ -87,6 +87,7 @@ struct PlaneOptions {
   double cluster_plane_distance = 0.1;   ///< point-to-plane distance of those planes' points, m (tighter than merge_distance: points near an edge between two walls stay with the other wall)
   double cluster_plane_width = 0.3;      ///< minimum_plane_width for those planes, m
   double cluster_plane_area = 0.3;       ///< minimum_plane_area for those planes, m^2
+  double cluster_plane_tilt_deg = 20.0;  ///< the smaller size tests hold for planes whose normal is within this of horizontal (walls); others need the full ones, degrees
 };
 
 /// Euclidean clustering of the points left after ground and planes (paper: clusters of TRAVEL).
