@@ -85,8 +85,8 @@ struct PlaneOptions {
   double cluster_plane_coverage = 0.65;  ///< a cluster without a pole whose RANSAC planes together hold at least this fraction of it is split into those planes (walls whose voxels all straddle an edge)
   double cluster_plane_share = 0.25;     ///< each of those planes holds at least this fraction of the cluster points no earlier plane took
   double cluster_plane_distance = 0.1;   ///< point-to-plane distance of those planes' points, m (tighter than merge_distance: points near an edge between two walls stay with the other wall)
-  double cluster_plane_width = 0.3;      ///< minimum_plane_width for those planes, m
-  double cluster_plane_area = 0.3;       ///< minimum_plane_area for those planes, m^2
+  double cluster_plane_width = 0.3;      ///< minimum_plane_width for those planes, m (spinning heads; mid360/avia presets: the full 0.5)
+  double cluster_plane_area = 0.3;       ///< minimum_plane_area for those planes, m^2 (spinning heads; mid360/avia presets: the full 2.0)
   double cluster_plane_tilt_deg = 20.0;  ///< the smaller size tests hold for planes whose normal is within this of horizontal (walls); others need the full ones, degrees
 };
 
