@@ -119,7 +119,7 @@ struct LineOptions {
 /// a Vegetation element (the crown, an ellipsoid). Lamp posts (arm and lamp are thin) and sign
 /// posts (the sign is flat) keep their line.
 struct TrunkOptions {
-  bool enabled = true;                 ///< look for a trunk in every cluster before its lines
+  bool enabled = true;                 ///< look for a trunk in every cluster before its lines (off in the mid360/avia presets)
   double slice_height = 0.25;          ///< the stem is grown upward from the cluster's foot in slices this tall, m
   double maximum_radius = 0.5;         ///< every stem point lies within this horizontal distance of the stem's centre line, m
   double minimum_height = 1.0;         ///< the stem is at least this tall, m
