@@ -74,13 +74,18 @@ BenchMethodOutput fake_method(const BenchMethodInput& input) {
   return output;
 }
 
-TEST_F(BenchFolder, ThreeShardsMergedGiveExactlyTheOutputsOfOneRun) {
+// Registers "fake" and "fake-slow" (the same answers, four times the time).
+void register_fake_methods() {
   register_bench_method("fake", fake_method);
   register_bench_method("fake-slow", [](const BenchMethodInput& input) {
     BenchMethodOutput output = fake_method(input);
     output.timings_ms["total"] *= 4.0;
     return output;
   });
+}
+
+TEST_F(BenchFolder, ThreeShardsMergedGiveExactlyTheOutputsOfOneRun) {
+  register_fake_methods();
   const std::vector<BenchPair> pairs = tiny_pairs(folder_, 7);
   BenchOptions options;
   options.methods = {"fake", "fake-slow"};
@@ -140,12 +145,7 @@ TEST_F(BenchFolder, ThreeShardsMergedGiveExactlyTheOutputsOfOneRun) {
 }
 
 TEST_F(BenchFolder, RunsOfDifferentMethodsOverTheSameTasksMergeIntoOneRun) {
-  register_bench_method("fake", fake_method);
-  register_bench_method("fake-slow", [](const BenchMethodInput& input) {
-    BenchMethodOutput output = fake_method(input);
-    output.timings_ms["total"] *= 4.0;
-    return output;
-  });
+  register_fake_methods();
   const std::vector<BenchPair> pairs = tiny_pairs(folder_, 5);
   BenchOptions options;
   options.yaw_range_degrees = 90.0;
