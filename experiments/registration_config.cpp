@@ -85,7 +85,16 @@ void apply_extraction(const YAML::Node& node, const std::string& file, Extractio
                  {"merge_distance", set(file, e.planes.merge_distance)},
                  {"normal_cosine", set(file, e.planes.normal_cosine)},
                  {"eigenvalue_ratio", set(file, e.planes.eigenvalue_ratio)},
-                 {"minimum_plane_points", set(file, e.planes.minimum_plane_points)}});
+                 {"minimum_plane_points", set(file, e.planes.minimum_plane_points)},
+                 {"cluster_plane_width", set(file, e.planes.cluster_plane_width)},
+                 {"cluster_plane_area", set(file, e.planes.cluster_plane_area)}});
+         }},
+        {"trunks",
+         [&e, file](const YAML::Node& value, const std::string& key) {
+           walk(value, file, key,
+                {{"enabled", set(file, e.trunks.enabled)},
+                 {"maximum_radius", set(file, e.trunks.maximum_radius)},
+                 {"minimum_height", set(file, e.trunks.minimum_height)}});
          }},
         {"clusters",
          [&e, file](const YAML::Node& value, const std::string& key) {
@@ -259,6 +268,13 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
   key_value("normal_cosine", e.planes.normal_cosine);
   key_value("eigenvalue_ratio", e.planes.eigenvalue_ratio);
   key_value("minimum_plane_points", e.planes.minimum_plane_points);
+  key_value("cluster_plane_width", e.planes.cluster_plane_width);
+  key_value("cluster_plane_area", e.planes.cluster_plane_area);
+  out << YAML::EndMap;
+  begin("trunks");
+  key_value("enabled", e.trunks.enabled);
+  key_value("maximum_radius", e.trunks.maximum_radius);
+  key_value("minimum_height", e.trunks.minimum_height);
   out << YAML::EndMap;
   begin("clusters");
   key_value("radius", e.clusters.radius);

@@ -51,6 +51,9 @@ TEST(RegistrationConfig, PresetFilesMirrorTheCxxPresets) {
       EXPECT_DOUBLE_EQ(side->planes.eigenvalue_ratio, cxx.source_extraction.planes.eigenvalue_ratio) << file;
       EXPECT_DOUBLE_EQ(side->clusters.radius, cxx.source_extraction.clusters.radius) << file;
       EXPECT_EQ(side->clusters.minimum_points, cxx.source_extraction.clusters.minimum_points) << file;
+      EXPECT_DOUBLE_EQ(side->planes.cluster_plane_width, cxx.source_extraction.planes.cluster_plane_width) << file;
+      EXPECT_DOUBLE_EQ(side->planes.cluster_plane_area, cxx.source_extraction.planes.cluster_plane_area) << file;
+      EXPECT_EQ(side->trunks.enabled, cxx.source_extraction.trunks.enabled) << file;
     }
     EXPECT_EQ(yaml.modelling.quadrics_per_class, cxx.modelling.quadrics_per_class);
     EXPECT_EQ(yaml.modelling.augmentation_threshold, cxx.modelling.augmentation_threshold);
@@ -202,6 +205,8 @@ TEST(RegistrationConfig, PrintedConfigurationRoundTripsThroughApply) {
     options.estimation.minimum_inliers = 4;
     options.ambiguity.score_ratio = 0.8125;
     options.ambiguity.minimum_clique_for_ok = 7;
+    options.source_extraction.trunks.enabled = !options.source_extraction.trunks.enabled;
+    options.source_extraction.planes.cluster_plane_area = 0.75;
     const std::string yaml = registration_config_yaml(options);
     const std::string file = write_text(folder / (name + ".yaml"), "sensor: " + name + "\n" + yaml);
     RegistrationOptions applied = registration_preset(name == "vlp16" ? "monument" : "vlp16");  // start elsewhere
