@@ -42,9 +42,10 @@ TEST(RegisterRealPairs, NonKittiPairsAreSolvedOrFlaggedNeverConfidentlyWrong) {
                 registration_succeeded(identity, truth) ? "success" : "failure", result.message.c_str());
     ++pairs_run;
     // A transform reported `ok` must be right; a wrong answer has to carry a non-ok status.
-    if (result.status == RegistrationStatus::Ok)
+    if (result.status == RegistrationStatus::Ok) {
       EXPECT_TRUE(success) << "confident wrong answer: RTE " << translation_error(result.transform, truth) << " m, RRE "
                            << rotation_error_degrees(result.transform, truth) << " deg";
+    }
     // Measured to succeed (README "Registration" table): the HDL-32E pair, and 3DTK 2->1, which
     // the identity does not solve to 0.2 m (it is 1.8 m off).
     if (pair.id == "hdl32_local" || pair.id == "3dtk_2_to_1") {
