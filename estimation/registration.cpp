@@ -298,9 +298,13 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
   return finish(RegistrationStatus::Ok, summary.str());
 }
 
+bool lacks_augmentation_of(const SceneModel& model, const SceneModel& other) {
+  return model.augmented_count() == 0 && other.augmented_count() > 0;
+}
+
 bool augment_other_side(const PointCloud& cloud, ModellingResult& modelling, const ModellingResult& other,
                         const ModellingOptions& options) {
-  if (modelling.model.augmented_count() > 0 || other.model.augmented_count() == 0) return false;
+  if (!lacks_augmentation_of(modelling.model, other.model)) return false;
   augment_scene_model(cloud.positions.cast<double>(), modelling, options);
   return modelling.model.augmented_count() > 0;
 }

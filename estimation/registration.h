@@ -138,6 +138,9 @@ FactorBuildOptions estimation_factor_options(const SceneModel& source, const Sce
 RegistrationResult register_models(const SceneModel& source, const SceneModel& target,
                                    const RegistrationOptions& options = {});
 
+/// Whether `model` has no augmented points while `other` has some (augment_other_side's condition).
+bool lacks_augmentation_of(const SceneModel& model, const SceneModel& other);
+
 /// Gives `modelling` (of `cloud`) augmented points when `other` has some and it has none
 /// (augment_scene_model): delta_a is decided per cloud, augmented points match only augmented
 /// points. Returns whether points were added. register_clouds and the benchmark use it.

@@ -462,7 +462,7 @@ std::pair<std::string, std::string> split_method_option(const std::string& optio
 std::vector<MethodSummary> merge_bench_outputs(const std::vector<std::string>& folders, const std::string& out_folder) {
   if (folders.empty()) throw Error("bench merge: no folder given");
   BenchRunInfo merged = read_bench_run_info(folders.front());
-  const std::string common_options = split_method_option(merged.options_text).first;
+  const auto [common_options, first_methods] = split_method_option(merged.options_text);
   std::vector<BenchRow> rows;
   for (const std::string& folder : folders) {
     const BenchRunInfo info = read_bench_run_info(folder);
@@ -477,11 +477,11 @@ std::vector<MethodSummary> merge_bench_outputs(const std::vector<std::string>& f
     const std::vector<BenchRow> part = read_bench_rows_csv((fs::path(folder) / "pairs.csv").string());
     rows.insert(rows.end(), part.begin(), part.end());
   }
-  if (!split_method_option(merged.options_text).second.empty()) {
+  if (!first_methods.empty()) {
     std::string methods;
     for (const std::string& method : merged.methods) methods += (methods.empty() ? "" : ",") + method;
-    const std::size_t value = merged.options_text.find(" --method ") + 10;
-    merged.options_text.replace(value, split_method_option(merged.options_text).second.size(), methods);
+    merged.options_text.replace(merged.options_text.find(" --method ") + std::string(" --method ").size(),
+                                first_methods.size(), methods);
   }
   const auto method_rank = [&](const std::string& method) {
     return static_cast<std::size_t>(std::find(merged.methods.begin(), merged.methods.end(), method) - merged.methods.begin());

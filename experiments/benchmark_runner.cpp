@@ -212,6 +212,8 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   // the cache holds each cloud's own model).
   if (registration.correspondences.match_augmented_points) {
     const auto augmented = [&](const PointCloud& cloud, const CachedModel& own, const CachedModel& other) {
+      // Copy the cached model (elements included) only when it will change.
+      if (!lacks_augmentation_of(own.modelling.model, other.modelling.model)) return std::shared_ptr<const CachedModel>();
       auto copy = std::make_shared<CachedModel>(own);
       const Clock::time_point start = Clock::now();
       if (!augment_other_side(cloud, copy->modelling, other.modelling, registration.modelling)) return std::shared_ptr<const CachedModel>();
