@@ -734,7 +734,9 @@ Scene make_monument_scene(std::uint64_t seed) {
   const double block_top = 30.0;
   const double block_back = -std::sqrt(drum_radius * drum_radius - block_half_width * block_half_width);
   const double door_half_width = 3.0;
-  const double door_top = podium + 12.0;
+  // The door (and its soffit) stops 2 m under the portico ceiling, so the soffit is its own plane
+  // and the recessed panel over the door shows between them.
+  const double door_top = column_top - 2.0;
   const double door_back = -std::sqrt(drum_radius * drum_radius - door_half_width * door_half_width);
   const double floor_end = -drum_radius - 0.05;
 
@@ -774,8 +776,12 @@ Scene make_monument_scene(std::uint64_t seed) {
   }
   {
     const double base = 2.0 * portico_half_width, rise = pediment_top - entablature_top;
+    // The tympanum is set back behind the cornice, as on the Pantheon, so it is not the
+    // entablature's plane continued.
+    const double tympanum_recess = 0.6;
     builder.polygon_plane("pediment", SemanticLabel::Pediment,
-                          Eigen::Vector3d(entablature_front, -portico_half_width, entablature_top), ey * base, up * rise,
+                          Eigen::Vector3d(entablature_front + tympanum_recess, -portico_half_width, entablature_top),
+                          ey * base, up * rise,
                           {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(base, 0.0), Eigen::Vector2d(0.5 * base, rise)});
     const Eigen::Vector3d slope_right(0.0, portico_half_width, rise);
     builder.rectangle("portico_roof_right", SemanticLabel::Roof,
@@ -790,7 +796,10 @@ Scene make_monument_scene(std::uint64_t seed) {
                     ey * (block_half_width - door_half_width), up * block_top);
   builder.rectangle("block_front_left", SemanticLabel::Wall, Eigen::Vector3d(block_front, door_half_width, 0.0),
                     ey * (block_half_width - door_half_width), up * block_top);
-  builder.rectangle("block_front_over_door", SemanticLabel::Wall, Eigen::Vector3d(block_front, -door_half_width, door_top),
+  // A panel recessed over the door: otherwise the wall over it is the two front walls' plane.
+  const double door_panel_recess = 0.5;
+  builder.rectangle("block_front_over_door", SemanticLabel::Wall,
+                    Eigen::Vector3d(block_front + door_panel_recess, -door_half_width, door_top),
                     ey * (2.0 * door_half_width), up * (block_top - door_top));
   for (int side = 0; side < 2; ++side) {
     const double y = side == 0 ? -door_half_width : door_half_width;
@@ -848,14 +857,18 @@ Scene make_monument_scene(std::uint64_t seed) {
                  -(apex_height - drum_top), -(apex_height - (springing + 16.0)));
   }
 
-  // Sensors: a LiDAR pair on the plaza facing the portico; TLS stations outside, in the portico and inside.
+  // Sensors: a LiDAR pair on the plaza facing the portico; TLS stations (below).
   const double yaw0 = degrees(random.uniform(-10.0, 10.0));
   const double yaw1 = yaw0 + degrees(random.uniform(20.0, 35.0));
   scene.default_lidar_poses = {make_pose(yaw_rotation(yaw0), Eigen::Vector3d(-72.0, -5.0, 1.8)),
                                make_pose(yaw_rotation(yaw1), Eigen::Vector3d(-66.0, 3.0, 1.8))};
+  // A survey that sees every face, as a heritage TLS campaign is planned: two stations on the plaza
+  // diagonals (steps, portico front and sides), one in the portico, one behind on the right (drum,
+  // roof ring, block side), two inside (dome, interior columns) and one on the intermediate block's
+  // roof (block roof, portico roof slopes), where ground stations cannot see.
   const std::vector<Eigen::Vector3d> stations = {
-      {-62.0, -18.0, 1.6}, {-60.0, 20.0, 1.6}, {-33.0, 0.0, podium + 1.6},
-      {12.0, -50.0, 1.6},  {7.0, 6.0, 1.6},     {-8.0, -7.0, 1.6}};
+      {-60.0, -26.0, 1.6}, {-60.0, 26.0, 1.6}, {-33.0, 0.0, podium + 1.6}, {12.0, -50.0, 1.6},
+      {7.0, 6.0, 1.6},     {-8.0, -7.0, 1.6},  {block_front + 2.2, 0.0, block_top + 1.6}};
   for (std::size_t i = 0; i < stations.size(); ++i)
     scene.default_tls_stations.push_back(make_pose(yaw_rotation(degrees(30.0 * static_cast<double>(i))), stations[i]));
   return scene;

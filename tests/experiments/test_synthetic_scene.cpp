@@ -63,7 +63,7 @@ TEST(Monument, CountsMatchThePapersModel) {
   EXPECT_EQ(counts.at("sphere"), 3);
   EXPECT_EQ(counts.at("circular_cone"), 1);
   EXPECT_EQ(scene.primitives.size(), 62u);
-  EXPECT_EQ(scene.default_tls_stations.size(), 6u);
+  EXPECT_EQ(scene.default_tls_stations.size(), 7u);
   EXPECT_EQ(scene.default_lidar_poses.size(), 2u);
   // The layout does not depend on the seed (only the default LiDAR yaw does).
   const auto layout = [](std::uint64_t seed) {
