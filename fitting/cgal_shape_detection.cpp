@@ -277,45 +277,22 @@ bool fit_sphere(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>
   return true;
 }
 
-/// Circular cone of the members from their normals (paper §"Quadric Extraction", static scans): the
-/// normals of a cone make one angle with its axis, so the axis is the direction in which the
-/// (consistently oriented) normals vary least and the apex is the least-squares meet of the tangent
-/// planes; Levenberg-Marquardt on the point-to-cone distances then refines apex, axis and half-angle.
-/// False when the normals do not pin a cone down (a flat or nearly parallel set).
-bool fit_cone(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, const std::vector<std::uint32_t>& members,
-              DetectedShape& cone) {
-  if (members.size() < 6) return false;
+/// Every k-th member, k chosen so that about 2000 remain (the cone fits' cost bound).
+std::vector<std::uint32_t> cone_fit_sample(const std::vector<std::uint32_t>& members) {
   const std::size_t stride = std::max<std::size_t>(1, members.size() / 2000);
   std::vector<std::uint32_t> sample;
   for (std::size_t k = 0; k < members.size(); k += stride) sample.push_back(members[k]);
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const std::uint32_t i : sample) scatter.noalias() += normals.col(i) * normals.col(i).transpose();
-  const Eigen::Vector3d reference = detail::principal_axes(scatter).vectors.col(2);
-  detail::Moments oriented;
-  Eigen::Matrix3d plane_normal_sum = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d plane_offset_sum = Eigen::Vector3d::Zero();
-  for (const std::uint32_t i : sample) {
-    const Eigen::Vector3d n = normals.col(i).dot(reference) < 0.0 ? Eigen::Vector3d(-normals.col(i)) : Eigen::Vector3d(normals.col(i));
-    oriented.add(n);
-    plane_normal_sum.noalias() += n * n.transpose();
-    plane_offset_sum += n * n.dot(points.col(i));
-  }
-  const detail::Principal spread = detail::principal_axes(oriented.covariance());
-  if (!(spread.values(1) > 1e-6)) return false;  // normals on one line or a point: no axis
-  Eigen::Vector3d axis = spread.vectors.col(0);
-  const Eigen::FullPivLU<Eigen::Matrix3d> solver(plane_normal_sum);
-  if (!solver.isInvertible()) return false;
-  Eigen::Vector3d apex = solver.solve(plane_offset_sum);
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const std::uint32_t i : sample) centroid += points.col(i);
-  centroid /= static_cast<double>(sample.size());
-  if (axis.dot(centroid - apex) < 0.0) axis = -axis;
-  double angle = 0.0;
-  for (const std::uint32_t i : sample) angle += std::acos(std::clamp(axis.dot((points.col(i) - apex).normalized()), -1.0, 1.0));
-  angle /= static_cast<double>(sample.size());
-  if (!apex.allFinite() || !std::isfinite(angle)) return false;
+  return sample;
+}
 
-  // Levenberg-Marquardt on 6 parameters: apex (3), axis tilt (2), half-angle (1); numeric Jacobian.
+/// Levenberg-Marquardt on the point-to-cone distances of (a sample of) the members, from the
+/// apex, axis and half-angle `cone` holds: 6 parameters (apex 3, axis tilt 2, half-angle 1) with a
+/// numeric Jacobian. False (cone untouched) when the result is not a proper cone.
+bool refine_cone(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members, DetectedShape& cone) {
+  if (members.size() < 6) return false;
+  const std::vector<std::uint32_t> sample = cone_fit_sample(members);
+  Eigen::Vector3d apex = cone.point, axis = cone.axis;
+  double angle = cone.size;
   using Vector6 = Eigen::Matrix<double, 6, 1>;
   const auto residuals = [&](const Vector6& delta, const Eigen::Vector3d& a0, const Eigen::Vector3d& p0, double alpha0,
                              Eigen::VectorXd& out) {
@@ -368,13 +345,54 @@ bool fit_cone(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, c
     if (!improved) break;
   }
   if (!(angle > 0.0 && angle < 0.5 * kPi) || !apex.allFinite()) return false;
+  cone.point = apex;
+  cone.axis = axis;
+  cone.size = angle;
+  return true;
+}
+
+/// Circular cone of the members from their normals (paper §"Quadric Extraction", static scans): the
+/// normals of a cone make one angle with its axis, so the axis is the direction in which the
+/// (consistently oriented) normals vary least and the apex is the least-squares meet of the tangent
+/// planes; Levenberg-Marquardt on the point-to-cone distances then refines apex, axis and half-angle.
+/// False when the normals do not pin a cone down (a flat or nearly parallel set).
+bool fit_cone(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, const std::vector<std::uint32_t>& members,
+              DetectedShape& cone) {
+  if (members.size() < 6) return false;
+  const std::vector<std::uint32_t> sample = cone_fit_sample(members);
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const std::uint32_t i : sample) scatter.noalias() += normals.col(i) * normals.col(i).transpose();
+  const Eigen::Vector3d reference = detail::principal_axes(scatter).vectors.col(2);
+  detail::Moments oriented;
+  Eigen::Matrix3d plane_normal_sum = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d plane_offset_sum = Eigen::Vector3d::Zero();
+  for (const std::uint32_t i : sample) {
+    const Eigen::Vector3d n = normals.col(i).dot(reference) < 0.0 ? Eigen::Vector3d(-normals.col(i)) : Eigen::Vector3d(normals.col(i));
+    oriented.add(n);
+    plane_normal_sum.noalias() += n * n.transpose();
+    plane_offset_sum += n * n.dot(points.col(i));
+  }
+  const detail::Principal spread = detail::principal_axes(oriented.covariance());
+  if (!(spread.values(1) > 1e-6)) return false;  // normals on one line or a point: no axis
+  Eigen::Vector3d axis = spread.vectors.col(0);
+  const Eigen::FullPivLU<Eigen::Matrix3d> solver(plane_normal_sum);
+  if (!solver.isInvertible()) return false;
+  Eigen::Vector3d apex = solver.solve(plane_offset_sum);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const std::uint32_t i : sample) centroid += points.col(i);
+  centroid /= static_cast<double>(sample.size());
+  if (axis.dot(centroid - apex) < 0.0) axis = -axis;
+  double angle = 0.0;
+  for (const std::uint32_t i : sample) angle += std::acos(std::clamp(axis.dot((points.col(i) - apex).normalized()), -1.0, 1.0));
+  angle /= static_cast<double>(sample.size());
+  if (!apex.allFinite() || !std::isfinite(angle)) return false;
   cone = DetectedShape();
   cone.element_class = ElementClass::Cone;
   cone.type = QuadricType::CircularCone;
   cone.point = apex;
   cone.axis = axis;
   cone.size = angle;
-  return true;
+  return refine_cone(points, members, cone);
 }
 
 void update_bounds(const Eigen::Matrix3Xd& points, DetectedShape& shape) {
@@ -565,6 +583,7 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
     const Agreement fit = agreement(candidate, simplified, members, epsilon);
     return fit.rms <= shape_options.explained_rms * epsilon && fit.inside_fraction >= shape_options.explained_fraction;
   };
+  const double minimum_cone_angle = shape_options.minimum_cone_angle_deg * kPi / 180.0;
   // The simplest quadric that explains a shape's points replaces it: Efficient RANSAC returns strips
   // of a large floor as cylinders of huge radius, and columns as cones of a tiny angle.
   for (DetectedShape& shape : shapes) {
@@ -576,8 +595,10 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
       shape = std::move(simpler);
       continue;
     }
+    // A cone narrower than minimum_cone_angle_deg is a cylinder (a column piece) even where its
+    // few extra parameters fit the noise a little better.
     if (shape.type == QuadricType::CircularCone && fit_cylinder(simplified, shape.members, shape.axis, simpler) &&
-        explains(simpler, shape.members)) {
+        (shape.size < minimum_cone_angle || explains(simpler, shape.members))) {
       simpler.lower = shape.lower, simpler.upper = shape.upper;
       shape = std::move(simpler);
       continue;
@@ -588,12 +609,33 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
     DetectedShape cone, cylinder;
     if (shape.type == QuadricType::CircularCylinder && fit_cylinder(simplified, shape.members, shape.axis, cylinder) &&
         fit_cone(simplified, simplified_normals, shape.members, cone) &&
-        cone.size >= shape_options.minimum_cone_angle_deg * kPi / 180.0 && explains(cone, shape.members) &&
+        cone.size >= minimum_cone_angle && explains(cone, shape.members) &&
         agreement(cone, simplified, shape.members, epsilon).rms <=
             0.5 * agreement(cylinder, simplified, shape.members, epsilon).rms) {
       cone.members = std::move(shape.members);
       cone.lower = shape.lower, cone.upper = shape.upper;
       shape = std::move(cone);
+    }
+  }
+  // A band of a wide cone close to a station can come back as a tilted cylinder whose own cone fit
+  // (from noisy normals) goes astray, while a smaller patch of the same cone is found as a cone
+  // (whose angle a small patch pins down poorly). When the cone, refined on the points of both from
+  // its own parameters, explains them all, the piece joins it.
+  // Cones narrower than minimum_cone_angle_deg are cylinders in disguise (a column) and take no part.
+  for (DetectedShape& cone : shapes) {
+    if (cone.type != QuadricType::CircularCone || cone.size < minimum_cone_angle) continue;
+    for (DetectedShape& piece : shapes) {
+      if (piece.type != QuadricType::CircularCylinder || piece.members.empty()) continue;
+      std::vector<std::uint32_t> united = cone.members;
+      united.insert(united.end(), piece.members.begin(), piece.members.end());
+      DetectedShape joined = cone;
+      if (!refine_cone(simplified, united, joined) || joined.size < minimum_cone_angle || !explains(joined, united))
+        continue;
+      joined.members = std::move(united);
+      joined.lower = cone.lower.cwiseMin(piece.lower);
+      joined.upper = cone.upper.cwiseMax(piece.upper);
+      cone = std::move(joined);
+      piece.members.clear();
     }
   }
   std::stable_sort(shapes.begin(), shapes.end(),
