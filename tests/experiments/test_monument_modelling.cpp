@@ -1,11 +1,10 @@
 // Issue 4, static-scan acceptance: the synthetic Pantheon-like monument (truth: 33 cylinders, 25
-// planes, 3 spheres, 1 cone) scanned from its six TLS stations and modelled with the `monument`
-// preset (CGAL Efficient RANSAC and the refits of fitting/cgal_shape_detection.cpp). The stations
-// scan at 0.5 deg (0.9 M points, 6.25x fewer than the 0.2 deg preset) so the file stays fast; the
-// full 5.67 M-point run is measured with `quadrix model` (README, "Acceptance on synthetic scenes").
-// Counts are checked against the issue's criterion (each within +-15% of the truth) for two RANSAC
-// seeds, and what is found is checked against the truth: which primitive each element holds,
-// its type and its centre.
+// planes, 3 spheres, 1 cone) scanned from its seven TLS stations at the `tls` preset's 0.2 deg (6.2 M
+// points, the issue's "~6 M-point monument") and modelled with the `monument` preset (CGAL Efficient
+// RANSAC and the refits of fitting/cgal_shape_detection.cpp). Counts are checked against the
+// issue's criterion (each within +-15% of the truth), and what is found is checked against the
+// truth: which primitive each element holds, its type. The run takes about 30 s, so one RANSAC
+// seed runs here; seeds 7, 11 and 13 were measured (README).
 #include "experiments/modelling_evaluation.h"
 #include "experiments/scanner_simulator.h"
 #include "fitting/scene_modelling.h"
@@ -14,26 +13,17 @@
 
 #include <initializer_list>
 #include <iostream>
+#include <set>
 #include <string>
 
 namespace quadrix {
 namespace {
 
-/// The monument scanned once for the whole file (simulation is the slow part to repeat).
+/// The monument as `quadrix synth monument --sensor tls` scans it, merged in the world frame.
 struct MonumentScan {
   Scene scene = make_monument_scene(1);
-  PointCloud cloud;
-  MonumentScan() {
-    SensorModel sensor = sensor_preset("tls");
-    sensor.dome_angular_step_deg = 0.5;
-    cloud = merge_scans_in_world(run_synthetic(scene, sensor, scene.default_tls_stations, 1));
-  }
+  PointCloud cloud = merge_scans_in_world(run_synthetic(scene, sensor_preset("tls"), scene.default_tls_stations, 1));
 };
-
-const MonumentScan& monument_scan() {
-  static const MonumentScan scan;
-  return scan;
-}
 
 int count_records(const ModellingEvaluation& evaluation, std::initializer_list<QuadricType> types) {
   int total = 0;
@@ -45,74 +35,71 @@ int count_records(const ModellingEvaluation& evaluation, std::initializer_list<Q
 }
 
 TEST(MonumentModelling, CountsAndPrimitivesAgainstTheTruth) {
-  const MonumentScan& scan = monument_scan();
+  const MonumentScan scan;
   const std::vector<float>& ids = scan.cloud.extra_fields.at("primitive_id");
-  for (const std::uint32_t seed : {7u, 11u}) {
-    SCOPED_TRACE("Efficient RANSAC seed " + std::to_string(seed));
-    ExtractionOptions options = extraction_preset("monument");
-    options.shapes.seed = seed;
-    const ModellingResult result = model_scene(scan.cloud, options, ModellingOptions());
-    ASSERT_EQ(result.status, ModellingStatus::Ok) << result.message;
-    const ModellingEvaluation evaluation = evaluate_modelling(scan.scene, ids, result, 200, 0.5);
-    const int cylinders = count_records(evaluation, {QuadricType::CircularCylinder, QuadricType::EllipticCylinder});
-    const int planes = count_records(evaluation, {QuadricType::Plane});
-    const int spheres = count_records(evaluation, {QuadricType::Sphere});
-    const int cones = count_records(evaluation, {QuadricType::CircularCone, QuadricType::EllipticCone});
-    std::cout << "monument (" << scan.cloud.size() << " points, 0.5 deg TLS, 6 stations, seed " << seed << "): cylinders "
-              << cylinders << "/33, planes " << planes << "/25, spheres " << spheres << "/3, cones " << cones
-              << "/1; recovered " << evaluation.recovered << "/" << evaluation.primitives.size() << " primitives with >= 200 points, "
-              << result.model.timings_ms.at("total") << " ms (2 shared cores, loaded)\n";
-    for (const PrimitiveRecovery& p : evaluation.primitives)
-      if (!p.recovered || !p.type_correct)
-        std::cout << "  " << p.name << " (" << quadric_type_name(p.truth_type) << ", " << p.points << " pts): share "
-                  << p.element_share << ", fitted " << (p.modelled ? quadric_type_name(p.fitted_type) : "-") << "\n";
+  const std::uint32_t seed = 7;
+  ExtractionOptions options = extraction_preset("monument");
+  options.shapes.seed = seed;
+  const ModellingResult result = model_scene(scan.cloud, options, ModellingOptions());
+  ASSERT_EQ(result.status, ModellingStatus::Ok) << result.message;
+  const ModellingEvaluation evaluation = evaluate_modelling(scan.scene, ids, result, 200, 0.5);
+  const int cylinders = count_records(evaluation, {QuadricType::CircularCylinder, QuadricType::EllipticCylinder});
+  const int planes = count_records(evaluation, {QuadricType::Plane});
+  const int spheres = count_records(evaluation, {QuadricType::Sphere});
+  const int cones = count_records(evaluation, {QuadricType::CircularCone, QuadricType::EllipticCone});
+  std::cout << "monument (" << scan.cloud.size() << " points, 0.2 deg TLS, 7 stations, seed " << seed << "): cylinders "
+            << cylinders << "/33, planes " << planes << "/25, spheres " << spheres << "/3, cones " << cones
+            << "/1; recovered " << evaluation.recovered << "/" << evaluation.primitives.size() << " primitives with >= 200 points, "
+            << result.model.timings_ms.at("total") << " ms (2 shared cores, loaded)\n";
+  for (const PrimitiveRecovery& p : evaluation.primitives)
+    if (!p.recovered || !p.type_correct)
+      std::cout << "  " << p.name << " (" << quadric_type_name(p.truth_type) << ", " << p.points << " pts): share "
+                << p.element_share << ", fitted " << (p.modelled ? quadric_type_name(p.fitted_type) : "-") << "\n";
 
-    // The issue's criterion, met at this resolution for cylinders (29-37) and the cone (exactly 1).
-    EXPECT_GE(cylinders, 29);
-    EXPECT_LE(cylinders, 37);
-    EXPECT_EQ(cones, 1);
-    // Spheres: the dome and the finials. At 0.5 deg one finial (0.8 m radius) has about 120 points
-    // and may be missed; the 0.2 deg scan finds all 3. Never more than the truth.
-    EXPECT_GE(spheres, 2);
-    EXPECT_LE(spheres, 3);
-    // Planes are NOT within 22-28: 5 true planes get (almost) no points from the six ground stations
-    // (roofs, the far block side, the wall over the door), two pairs are one plane each (pediment and
-    // entablature front, portico ceiling and door soffit) and the step treads are grazed. What is
-    // found must not be inflated by pieces either: at most the truth.
-    EXPECT_GE(planes, 12);
-    EXPECT_LE(planes, 25);
+  // The issue's criterion: every count within +-15% of the truth.
+  EXPECT_GE(cylinders, 29);
+  EXPECT_LE(cylinders, 37);
+  EXPECT_GE(planes, 22);
+  EXPECT_LE(planes, 28);
+  EXPECT_EQ(spheres, 3);
+  EXPECT_EQ(cones, 1);
 
-    // Every true primitive with >= 200 points is held by one element (>= half its points) of the
-    // right type: each column and the drum by a cylinder holding >= 90% of it, the dome by a sphere,
-    // the roof ring by the cone, every plane with >= 1000 points by a plane. (Record centres are not
-    // compared: modelling's statistical fitter refits the element and its t_f of a partial arc or a
-    // dome cap is not the detected axis or centre.)
-    ASSERT_GE(evaluation.primitives.size(), 45u);
-    EXPECT_GE(evaluation.recovered_fraction, 0.95);
-    EXPECT_GE(evaluation.type_correct_fraction, 0.95);
-    int cylinders_held = 0;
-    for (const PrimitiveRecovery& p : evaluation.primitives) {
-      SCOPED_TRACE(p.name);
-      if (p.truth_type == QuadricType::CircularCylinder) {
-        EXPECT_TRUE(p.modelled);
-        EXPECT_EQ(p.fitted_type, QuadricType::CircularCylinder);
-        EXPECT_GE(p.element_share, 0.9);
-        if (p.modelled && p.element_share >= 0.9) ++cylinders_held;
-      }
-      if (p.name == "dome") {
-        EXPECT_EQ(p.fitted_type, QuadricType::Sphere);
-      }
-      if (p.name == "roof_ring") {
-        EXPECT_EQ(p.fitted_type, QuadricType::CircularCone);
-      }
-      if (p.truth_type == QuadricType::Plane && p.points >= 1000) {
-        EXPECT_EQ(p.fitted_type, QuadricType::Plane);
-      }
+  // Every true primitive with >= 200 points is held by one element (>= half its points) of the
+  // right type: each column and the drum by a cylinder holding >= 90% of it, the dome by a sphere,
+  // the roof ring by the cone, every plane with >= 1000 points by a plane. (Record centres are not
+  // compared: modelling's statistical fitter refits the element and its t_f of a partial arc or a
+  // dome cap is not the detected axis or centre.)
+  ASSERT_GE(evaluation.primitives.size(), 55u);
+  EXPECT_GE(evaluation.recovered_fraction, 0.95);
+  EXPECT_GE(evaluation.type_correct_fraction, 0.95);
+  int cylinders_held = 0;
+  for (const PrimitiveRecovery& p : evaluation.primitives) {
+    SCOPED_TRACE(p.name);
+    if (p.truth_type == QuadricType::CircularCylinder) {
+      EXPECT_TRUE(p.modelled);
+      EXPECT_EQ(p.fitted_type, QuadricType::CircularCylinder);
+      EXPECT_GE(p.element_share, 0.9);
+      if (p.modelled && p.element_share >= 0.9) ++cylinders_held;
     }
-    EXPECT_EQ(cylinders_held, 33);  // so the 33 cylinder records are the 33 true cylinders, one each
-    EXPECT_TRUE(result.model.has_ground);
-    EXPECT_GE(result.model.ground_normal.z(), 0.999);
+    if (p.name == "dome") {
+      EXPECT_EQ(p.fitted_type, QuadricType::Sphere);
+    }
+    if (p.name == "roof_ring") {
+      EXPECT_EQ(p.fitted_type, QuadricType::CircularCone);
+    }
+    if (p.truth_type == QuadricType::Plane && p.points >= 1000) {
+      EXPECT_EQ(p.fitted_type, QuadricType::Plane);
+    }
   }
+  EXPECT_EQ(cylinders_held, 33);  // so the 33 cylinder records are the 33 true cylinders, one each
+  // The plane count is not made of pieces: at least 22 true planes each have a plane of their own.
+  std::set<int> plane_elements;
+  for (const PrimitiveRecovery& p : evaluation.primitives)
+    if (p.truth_type == QuadricType::Plane && p.recovered && p.fitted_type == QuadricType::Plane)
+      plane_elements.insert(p.element);
+  EXPECT_GE(plane_elements.size(), 22u);
+  EXPECT_TRUE(result.model.has_ground);
+  EXPECT_GE(result.model.ground_normal.z(), 0.999);
 }
 
 }  // namespace
