@@ -94,7 +94,10 @@ void apply_extraction(const YAML::Node& node, const std::string& file, Extractio
            walk(value, file, key,
                 {{"enabled", set(file, e.trunks.enabled)},
                  {"maximum_radius", set(file, e.trunks.maximum_radius)},
-                 {"minimum_height", set(file, e.trunks.minimum_height)}});
+                 {"minimum_height", set(file, e.trunks.minimum_height)},
+                 {"crownless_minimum_radius", set(file, e.trunks.crownless_minimum_radius)},
+                 {"crownless_slice_points", set(file, e.trunks.crownless_slice_points)},
+                 {"crownless_top_tolerance_deg", set(file, e.trunks.crownless_top_tolerance_deg)}});
          }},
         {"clusters",
          [&e, file](const YAML::Node& value, const std::string& key) {
@@ -275,6 +278,9 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
   key_value("enabled", e.trunks.enabled);
   key_value("maximum_radius", e.trunks.maximum_radius);
   key_value("minimum_height", e.trunks.minimum_height);
+  key_value("crownless_minimum_radius", e.trunks.crownless_minimum_radius);
+  key_value("crownless_slice_points", e.trunks.crownless_slice_points);
+  key_value("crownless_top_tolerance_deg", e.trunks.crownless_top_tolerance_deg);
   out << YAML::EndMap;
   begin("clusters");
   key_value("radius", e.clusters.radius);

@@ -2,7 +2,8 @@
 // ground and planes; a line must dominate its cluster, be long enough, and (by default) stand
 // roughly upright like a pole. Hypotheses are refined by PCA of their inliers. Before the lines, a
 // cluster standing on a narrow upright stem under a round crown is split into the paper's trunk
-// (elliptic cylinder) and vegetation (ellipsoid) key objects.
+// (elliptic cylinder) and vegetation (ellipsoid) key objects; a line whose stem is wider than a
+// pole's and runs out of the top of the scanner's view is a trunk whose crown was not seen.
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
 
@@ -156,6 +157,77 @@ bool separate_trunk(const Eigen::Matrix3Xd& points, const std::vector<std::uint3
   for (std::size_t k = 0; k < order.size(); ++k) (k < next ? trunk : crown).push_back(cluster[order[k]]);
   std::sort(trunk.begin(), trunk.end());
   std::sort(crown.begin(), crown.end());
+  return true;
+}
+
+double stem_radius_across_view(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& stem,
+                               const TrunkOptions& options, const Eigen::Vector3d& sensor_origin) {
+  if (stem.size() < 2 || !(options.slice_height > 0.0)) return -1.0;
+  detail::Moments moments;
+  for (const std::uint32_t index : stem) moments.add(points.col(index));
+  const Eigen::Vector3d centre = moments.mean();
+  const Eigen::Vector3d axis = detail::principal_axes(moments.covariance()).vectors.col(2);
+  // Across the line of sight: perpendicular to the stem and to the view direction.
+  Eigen::Vector3d view = centre - sensor_origin;
+  view -= view.dot(axis) * axis;
+  if (!(view.norm() > 1e-6)) return -1.0;
+  const Eigen::Vector3d across = axis.cross(view).normalized();
+  std::vector<std::pair<long, double>> slice_and_offset;
+  slice_and_offset.reserve(stem.size());
+  for (const std::uint32_t index : stem) {
+    const Eigen::Vector3d d = points.col(index) - centre;
+    slice_and_offset.emplace_back(static_cast<long>(std::floor(d.dot(axis) / options.slice_height)), d.dot(across));
+  }
+  std::sort(slice_and_offset.begin(), slice_and_offset.end());
+  std::vector<double> half_widths;
+  for (std::size_t begin = 0; begin < slice_and_offset.size();) {
+    std::size_t end = begin;
+    double lowest = 1e300, highest = -1e300;
+    for (; end < slice_and_offset.size() && slice_and_offset[end].first == slice_and_offset[begin].first; ++end) {
+      lowest = std::min(lowest, slice_and_offset[end].second);
+      highest = std::max(highest, slice_and_offset[end].second);
+    }
+    if (static_cast<int>(end - begin) >= options.crownless_slice_points) half_widths.push_back(0.5 * (highest - lowest));
+    begin = end;
+  }
+  const std::size_t needed = static_cast<std::size_t>(std::max(1.0, std::ceil(options.minimum_height / options.slice_height - 1e-9)));
+  if (half_widths.size() < needed) return -1.0;
+  std::sort(half_widths.begin(), half_widths.end());
+  return half_widths[half_widths.size() / 4];
+}
+
+bool stem_reaches_top_of_view(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& stem,
+                              const std::vector<std::uint32_t>& cloud, const TrunkOptions& options,
+                              const Eigen::Vector3d& up_axis, const Eigen::Vector3d& sensor_origin) {
+  if (stem.empty()) return false;
+  const Eigen::Vector3d up = up_axis.normalized();
+  // Horizontal direction of the stem from the sensor, and its azimuth span as the smallest cosine
+  // between that direction and any stem point's horizontal direction.
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const std::uint32_t index : stem) centre += points.col(index) - sensor_origin;
+  centre -= centre.dot(up) * up;
+  if (!(centre.norm() > 1e-9)) return false;
+  const Eigen::Vector3d direction = centre.normalized();
+  double span_cosine = 1.0, top_tangent = -1e300;
+  for (const std::uint32_t index : stem) {
+    const Eigen::Vector3d d = points.col(index) - sensor_origin;
+    const Eigen::Vector3d horizontal = d - d.dot(up) * up;
+    const double length = horizontal.norm();
+    if (!(length > 1e-9)) return false;  // a stem through the sensor has no azimuth
+    span_cosine = std::min(span_cosine, horizontal.dot(direction) / length);
+    top_tangent = std::max(top_tangent, d.dot(up) / length);
+  }
+  // Elevation angles compared through their tangents (tan is increasing below 90 degrees).
+  const double tolerance = options.crownless_top_tolerance_deg * 3.14159265358979323846 / 180.0;
+  const double limit_tangent = std::tan(std::min(std::atan(top_tangent) + tolerance, 1.5707963));
+  for (const std::uint32_t index : cloud) {
+    const Eigen::Vector3d d = points.col(index) - sensor_origin;
+    const double height = d.dot(up);
+    const Eigen::Vector3d horizontal = d - height * up;
+    const double length = horizontal.norm();
+    if (!(length > 1e-9) || horizontal.dot(direction) < span_cosine * length) continue;
+    if (height > limit_tangent * length) return false;
+  }
   return true;
 }
 

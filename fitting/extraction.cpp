@@ -149,12 +149,13 @@ void set_ground(ExtractionResult& result, const Eigen::Matrix3Xd& points, const 
 }
 
 // Trunks and crowns, lines, walls and objects from the clusters (paper step 1(c) and the
-// geometry-only key objects): a tree gives its trunk and crown; otherwise RANSAC lines (poles);
+// geometry-only key objects): a tree gives its trunk and crown; otherwise RANSAC lines (poles, or
+// trunks when thicker than a pole and cut by the top of the view);
 // a cluster without a pole that is mostly planes gives those planes (walls the voxels missed);
 // what is left of a cluster is an object.
-void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::vector<std::uint32_t>>& clusters,
-                       const ExtractionOptions& options, const Eigen::Vector3d& up, std::vector<Element>& lines,
-                       std::vector<Element>& objects) {
+void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& in_range,
+                       const std::vector<std::vector<std::uint32_t>>& clusters, const ExtractionOptions& options,
+                       const Eigen::Vector3d& up, std::vector<Element>& lines, std::vector<Element>& objects) {
   std::vector<std::vector<Element>> elements_per_cluster(clusters.size());
   tbb::parallel_for(std::size_t(0), clusters.size(), [&](std::size_t c) {
     std::vector<Element>& found = elements_per_cluster[c];
@@ -172,6 +173,14 @@ void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::ve
     }
     std::vector<std::uint32_t> rest;
     found = extract_lines(points, clusters[c], options.lines, up, rest);
+    // A trunk whose crown is above the top beam: its stem is thicker than a pole's and runs out of
+    // the top of the view.
+    if (options.trunks.enabled && options.trunks.crownless_minimum_radius > 0.0)
+      for (Element& line : found)
+        if (stem_radius_across_view(points, line.point_indices, options.trunks, options.sensor_origin) >=
+                options.trunks.crownless_minimum_radius &&
+            stem_reaches_top_of_view(points, line.point_indices, in_range, options.trunks, up, options.sensor_origin))
+          line.element_class = ElementClass::Trunk;
     if (found.empty()) {
       for (std::vector<std::uint32_t>& plane : cluster_planes(points, rest, options.planes, up)) {
         std::vector<std::uint32_t> left;
@@ -297,7 +306,7 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
                    clusters.end());
     result.timings_ms["clusters"] = detail::elapsed_ms(stage);
     stage = Clock::now();
-    lines_and_objects(points, clusters, options, up, lines, objects);
+    lines_and_objects(points, in_range, clusters, options, up, lines, objects);
     result.timings_ms["lines"] = detail::elapsed_ms(stage);
   }
   for (auto* group : {&planes, &lines, &objects})

@@ -61,7 +61,8 @@ SyntheticStreet make_street(std::uint64_t seed, double noise = 0.02) {
       const Eigen::Vector2d toward_sensor = -poles[pole].normalized();
       const double phi = (unit(engine) - 0.5) * kPi, h = 5.0 * unit(engine);
       const double base = std::atan2(toward_sensor.y(), toward_sensor.x());
-      const Eigen::Vector2d xy = poles[pole] + 0.12 * Eigen::Vector2d(std::cos(base + phi), std::sin(base + phi));
+      // 0.08 m, a lamp post's radius: a stem of 0.11 m or more whose top is out of view is a trunk.
+      const Eigen::Vector2d xy = poles[pole] + 0.08 * Eigen::Vector2d(std::cos(base + phi), std::sin(base + phi));
       add_point(scene, points, Eigen::Vector3d(xy.x(), xy.y(), ground_height(xy.x()) + h) + 0.5 * jitter(), 10 + pole);
     }
   const Eigen::Vector2d boxes[2] = {{10.0, -4.0}, {-6.0, 4.5}};
@@ -297,6 +298,112 @@ TEST(Extraction, TreeGivesItsTrunkAndCrownButPostsKeepTheirLine) {
     sign_truth.push_back(1);
   }
   EXPECT_FALSE(separate_trunk(to_matrix(sign), all_indices(sign.size()), options, Eigen::Vector3d::UnitZ(), trunk, crown));
+}
+
+// An upright cylinder standing on the ground, for ring_scan.
+struct UprightCylinder {
+  Eigen::Vector2d axis;  // where it stands, m
+  double radius;         // m
+  double top;            // height of its top, m (the ground is at -1.73)
+};
+
+// A spinning scanner at the origin, 1.73 m above flat ground, with the HDL-64E's top beam (+2 deg),
+// beams every 0.4 deg below it and 0.2 deg azimuth steps, seeing upright cylinders and a wall
+// x = wall_x up to 8 m high (behind the sensor); range noise 1 cm. truth: cylinder index, -1
+// ground, -2 wall.
+PointCloud ring_scan(const std::vector<UprightCylinder>& cylinders, double wall_x, std::vector<int>& truth) {
+  std::mt19937_64 engine(17);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Eigen::Vector3f> points;
+  truth.clear();
+  for (int beam = 0; beam <= 64; ++beam) {
+    const double slope = std::tan((2.0 - 0.4 * beam) * kPi / 180.0);  // height gained per metre of horizontal range
+    for (int step = 0; step < 1800; ++step) {
+      const double azimuth = step * 0.2 * kPi / 180.0;
+      const Eigen::Vector2d along(std::cos(azimuth), std::sin(azimuth));
+      double nearest = 1e300;  // horizontal distance of the first hit
+      int hit = -3;
+      for (std::size_t c = 0; c < cylinders.size(); ++c) {
+        const double middle = along.dot(cylinders[c].axis);
+        const double squared = cylinders[c].radius * cylinders[c].radius - (cylinders[c].axis - middle * along).squaredNorm();
+        if (squared < 0.0 || middle <= 0.0) continue;
+        const double distance = middle - std::sqrt(squared);
+        const double height = distance * slope;
+        if (height >= -1.73 && height <= cylinders[c].top && distance < nearest) {
+          nearest = distance;
+          hit = static_cast<int>(c);
+        }
+      }
+      if (along.x() < -1e-9 && wall_x / along.x() * slope <= 8.0 && wall_x / along.x() < nearest) {
+        nearest = wall_x / along.x();
+        hit = -2;
+      }
+      if (slope < 0.0 && -1.73 / slope < std::min(nearest, 60.0)) {
+        nearest = -1.73 / slope;
+        hit = -1;
+      }
+      if (hit == -3) continue;
+      const double range = nearest * std::sqrt(1.0 + slope * slope) + noise(engine);
+      const Eigen::Vector3d direction = Eigen::Vector3d(along.x(), along.y(), slope).normalized();
+      points.push_back((range * direction).cast<float>());
+      truth.push_back(hit);
+    }
+  }
+  PointCloud cloud;
+  cloud.positions.resize(3, static_cast<Eigen::Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) cloud.positions.col(static_cast<Eigen::Index>(i)) = points[i];
+  return cloud;
+}
+
+TEST(Extraction, ThickStemRunningOutOfViewIsATrunkButPolesAndPillarsStayLines) {
+  // A 0.2 m trunk whose crown is above the top beam, a 0.07 m lamp post, a 0.2 m pillar 1.7 m tall
+  // in front of a wall (the beams above it hit the wall) and a 0.2 m trunk 46 m away (too sparse).
+  const std::vector<UprightCylinder> cylinders = {
+      {{8.0, 0.0}, 0.2, 6.0}, {{6.0, 4.0}, 0.07, 6.0}, {{-8.0, 2.0}, 0.2, 0.0}, {{45.0, 10.0}, 0.2, 6.0}};
+  std::vector<int> truth;
+  const PointCloud cloud = ring_scan(cylinders, -14.0, truth);
+  const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
+  std::vector<std::vector<std::uint32_t>> of_cylinder(cylinders.size());
+  std::vector<std::uint32_t> everything;
+  for (std::uint32_t i = 0; i < truth.size(); ++i) {
+    everything.push_back(i);
+    if (truth[i] >= 0) of_cylinder[static_cast<std::size_t>(truth[i])].push_back(i);
+  }
+  const TrunkOptions options;
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ(), sensor = Eigen::Vector3d::Zero();
+  EXPECT_NEAR(stem_radius_across_view(points, of_cylinder[0], options, sensor), 0.2, 0.03);
+  EXPECT_NEAR(stem_radius_across_view(points, of_cylinder[1], options, sensor), 0.07, 0.03);
+  EXPECT_NEAR(stem_radius_across_view(points, of_cylinder[2], options, sensor), 0.2, 0.03);
+  EXPECT_LT(stem_radius_across_view(points, of_cylinder[3], options, sensor), 0.0);  // not measured
+  EXPECT_TRUE(stem_reaches_top_of_view(points, of_cylinder[0], everything, options, up, sensor));
+  EXPECT_TRUE(stem_reaches_top_of_view(points, of_cylinder[1], everything, options, up, sensor));
+  EXPECT_FALSE(stem_reaches_top_of_view(points, of_cylinder[2], everything, options, up, sensor));
+
+  // The whole pipeline: the element holding most of each cylinder has the expected class.
+  const auto class_of = [&](const ExtractionResult& result, int cylinder) {
+    std::size_t best = 0;
+    ElementClass element_class = ElementClass::Ground;
+    for (const Element& element : result.elements) {
+      const auto held = static_cast<std::size_t>(std::count_if(element.point_indices.begin(), element.point_indices.end(),
+                                                               [&](std::uint32_t i) { return truth[i] == cylinder; }));
+      if (held > best) {
+        best = held;
+        element_class = element.element_class;
+      }
+    }
+    return element_class;
+  };
+  ExtractionOptions extraction = extraction_preset("vlp64");
+  const ExtractionResult result = extract_elements(cloud, extraction);
+  ASSERT_TRUE(result.has_ground);
+  EXPECT_EQ(class_of(result, 0), ElementClass::Trunk);
+  EXPECT_EQ(class_of(result, 1), ElementClass::Line);
+  EXPECT_EQ(class_of(result, 2), ElementClass::Line);
+  EXPECT_NE(class_of(result, 3), ElementClass::Trunk);
+  // Switched off (the mid360/avia presets), the trunk is a line again.
+  extraction.trunks.crownless_minimum_radius = 0.0;
+  EXPECT_EQ(class_of(extract_elements(cloud, extraction), 0), ElementClass::Line);
+  EXPECT_EQ(class_of(extract_elements(cloud, extraction_preset("avia")), 0), ElementClass::Line);
 }
 
 TEST(Extraction, ClusterOfWallsIsSplitIntoItsPlanesButABlobIsNot) {
