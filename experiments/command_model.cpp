@@ -4,6 +4,7 @@
 // (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling").
 #include "experiments/command_registry.h"
 #include "experiments/model_picture.h"
+#include "experiments/registration_config.h"
 #include "fitting/scene_modelling.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
@@ -26,7 +27,7 @@ struct ModelCommandOptions {
   std::string format = "auto";        ///< input format override
   std::string preset = "vlp64";       ///< extraction preset
   std::string labels;                 ///< SemanticKITTI .label file (switches to the labels semantic mode)
-  std::string fitter = "statistical"; ///< QuadricFitter registry name
+  std::string fitter;                 ///< QuadricFitter registry name (empty: the preset's)
   std::string plane_method = "voxel"; ///< voxel (paper) or cgal (CGAL region growing)
   std::string out;                    ///< model JSON
   std::string binary;                 ///< model binary (.qsm)
@@ -156,9 +157,9 @@ void run(const ModelCommandOptions& options) {
     extraction.planes.method = PlaneMethod::CgalRegionGrowing;
   else if (options.plane_method != "voxel")
     throw Error("--plane-method: expected voxel or cgal, got '" + options.plane_method + "'");
-  ModellingOptions modelling;
-  modelling.fitter = options.fitter;
-  make_quadric_fitter(options.fitter);  // fail early with the list of fitters
+  ModellingOptions modelling = registration_preset(options.preset).modelling;
+  if (!options.fitter.empty()) modelling.fitter = options.fitter;
+  make_quadric_fitter(modelling.fitter);  // fail early with the list of fitters
 
   CloudReadOptions read_options;
   read_options.format = cloud_format_from_name(options.format);
@@ -184,7 +185,7 @@ void run(const ModelCommandOptions& options) {
 
   std::string extra = "\"input\": \"" + std::filesystem::path(options.inputs.front()).filename().string() + "\", \"inputs\": " +
                       std::to_string(options.inputs.size()) + ", \"preset\": \"" +
-                      options.preset + "\", \"fitter\": \"" + options.fitter + "\", \"status\": \"" +
+                      options.preset + "\", \"fitter\": \"" + modelling.fitter + "\", \"status\": \"" +
                       modelling_status_name(result.status) + "\", \"extraction_status\": \"" +
                       extraction_status_name(result.extraction.status) + "\", \"raw_cloud_bytes\": " +
                       std::to_string(static_cast<long long>(raw_bytes)) + ", \"elements_by_class\": {";
@@ -213,7 +214,7 @@ void run(const ModelCommandOptions& options) {
 
   std::printf("quadrix model %s%s  (%zu points, %zu in range, preset %s, fitter %s)\n", options.inputs.front().c_str(),
               options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
-              result.extraction.points_in_range, options.preset.c_str(), options.fitter.c_str());
+              result.extraction.points_in_range, options.preset.c_str(), modelling.fitter.c_str());
   std::printf("status: %s%s%s\n\n", modelling_status_name(result.status).c_str(), result.message.empty() ? "" : " - ",
               result.message.c_str());
   std::printf("%-12s %-20s %9s %9s\n", "class", "type", "elements", "quadrics");
@@ -264,7 +265,8 @@ const CommandRegistration registration(50, [](CLI::App& app) {
                       "SemanticKITTI .label file: use the labels semantic mode instead of geometry-only clusters");
   std::string fitters;
   for (const auto& name : quadric_fitter_names()) fitters += (fitters.empty() ? "" : ", ") + name;
-  command->add_option("--fitter", options->fitter, "Quadric fitter: " + fitters)->capture_default_str();
+  command->add_option("--fitter", options->fitter,
+                      "Quadric fitter: " + fitters + " (default: the preset's; statistical, constrained for monument)");
   command->add_option("--plane-method", options->plane_method,
                       "voxel (paper: voxel eigenvalue ratio + region growing) or cgal (CGAL region growing)")
       ->capture_default_str();

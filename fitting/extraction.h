@@ -161,7 +161,7 @@ struct ShapeDetectionOptions {
   double explained_rms = 0.5;          ///< a (refitted or simpler) shape explains points when their RMS distance to it is at most this fraction of epsilon ...
   double explained_fraction = 0.9;     ///< ... and at least this fraction of them lie within epsilon
   double merge_plane_gap = 5.0;        ///< merging planes: only pieces whose points come within about this distance, m (coplanar faces apart stay apart; the ground and 0: any distance)
-  double minimum_cone_angle_deg = 5.0; ///< a cylinder becomes a cone fitted from its normals only when the cone's half-angle is at least this, degrees
+  double minimum_cone_angle_deg = 5.0; ///< cones narrower than this are cylinders: a cylinder becomes a cone (fitted from its normals, or a detected cone refined on both) only at this half-angle or more, degrees
   double absorb_fraction = 0.8;        ///< a shape whose points larger shapes explain (within epsilon) at this fraction is dissolved into them (> 1: off)
   std::uint32_t seed = 7;              ///< seed of CGAL's default random generator before detection (deterministic runs)
 };

@@ -55,6 +55,7 @@ TEST(RegistrationConfig, PresetFilesMirrorTheCxxPresets) {
       EXPECT_DOUBLE_EQ(side->planes.cluster_plane_area, cxx.source_extraction.planes.cluster_plane_area) << file;
       EXPECT_EQ(side->trunks.enabled, cxx.source_extraction.trunks.enabled) << file;
     }
+    EXPECT_EQ(yaml.modelling.fitter, cxx.modelling.fitter);
     EXPECT_EQ(yaml.modelling.quadrics_per_class, cxx.modelling.quadrics_per_class);
     EXPECT_EQ(yaml.modelling.augmentation_threshold, cxx.modelling.augmentation_threshold);
     EXPECT_EQ(yaml.correspondences.top_k_similar, cxx.correspondences.top_k_similar);
