@@ -298,6 +298,29 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
   return finish(RegistrationStatus::Ok, summary.str());
 }
 
+void check_overlap(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                   const AmbiguityOptions& options) {
+  const Clock::time_point start = Clock::now();
+  std::optional<Eigen::Vector4d> source_ground;
+  if (result.source_model.has_ground)
+    source_ground = Eigen::Vector4d(result.source_model.ground_normal.x(), result.source_model.ground_normal.y(),
+                                    result.source_model.ground_normal.z(), result.source_model.ground_offset);
+  const OverlapMeasure overlap = measure_overlap(source, target, result.transform, source_ground);
+  result.overlap = overlap;
+  if (result.status == RegistrationStatus::Ok && options.overlap_margin >= 0.0 && overlap.sampled > 0 &&
+      overlap.transformed < overlap.identity - options.overlap_margin) {
+    std::ostringstream why;
+    why.precision(2);
+    why << "; but only " << overlap.transformed << " of the source lands within " << overlap.distance
+        << " m of the target, against " << overlap.identity << " left where it is (margin " << options.overlap_margin << ")";
+    result.status = RegistrationStatus::Ambiguous;
+    result.message += why.str();
+  }
+  const double ms = elapsed_ms(start);
+  result.timings_ms["overlap"] = ms;
+  if (const auto total = result.timings_ms.find("total"); total != result.timings_ms.end()) total->second += ms;
+}
+
 bool lacks_augmentation_of(const SceneModel& model, const SceneModel& other) {
   return model.augmented_count() == 0 && other.augmented_count() > 0;
 }
@@ -335,6 +358,7 @@ RegistrationResult register_clouds(const PointCloud& source, const PointCloud& t
   }
 
   RegistrationResult result = register_models(source_modelling.model, target_modelling.model, options);
+  check_overlap(result, source, target, options.ambiguity);
   result.timings_ms["modelling_source"] = source_ms;
   result.timings_ms["modelling_target"] = target_ms;
   result.timings_ms["total"] = elapsed_ms(start);

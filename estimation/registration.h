@@ -12,6 +12,7 @@
 #pragma once
 
 #include "estimation/candidate_selection.h"
+#include "estimation/overlap.h"
 #include "estimation/refiner.h"
 #include "fitting/extraction.h"
 #include "fitting/scene_model.h"
@@ -26,6 +27,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -62,6 +64,7 @@ struct AmbiguityOptions {
   double translation_disagreement = 2.0;      ///< candidates farther apart than this disagree, m (success rule: 2 m)
   double rotation_disagreement_degrees = 5.0; ///< or rotated more than this apart, degrees (success rule: 5 deg)
   std::size_t minimum_clique_for_ok = 5;      ///< a winner supported by a smaller clique is `ambiguous`: 3 or 4 mutually consistent pairs arise by chance among hundreds
+  double overlap_margin = 0.15;               ///< an `ok` answer whose dense overlap (check_overlap) is below the unmoved source's by more than this fraction is `ambiguous` (negative: no check)
 };
 
 /// Every option of register_clouds; defaults are the paper's (§"Implementation Details").
@@ -124,6 +127,7 @@ struct RegistrationResult {
   std::map<std::string, double> timings_ms;
   SceneModel source_model;                                      ///< R_x
   SceneModel target_model;                                      ///< R_y
+  std::optional<OverlapMeasure> overlap;                        ///< dense overlap of the answer (check_overlap: register_clouds and the benchmark)
 };
 
 /// The factor options of candidate estimation between two models (Algorithm 1): Augment(), f_pp over
@@ -155,6 +159,14 @@ RegistrationResult register_clouds(const PointCloud& source, const PointCloud& t
                                    const RegistrationOptions& options = {},
                                    const std::vector<std::uint32_t>& source_labels = {},
                                    const std::vector<std::uint32_t>& target_labels = {});
+
+/// Measures the answer's dense overlap into `result.overlap` (measure_overlap at 0.3 m, points near
+/// the source model's ground skipped) and demotes an `ok` answer to `ambiguous` when it overlaps
+/// less than leaving the source in place by more than `options.overlap_margin`: a transform that
+/// fits the points worse than not moving is not a confident answer. Adds an "overlap" timing (also
+/// to "total"). register_clouds and the benchmark call it after register_models.
+void check_overlap(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                   const AmbiguityOptions& options);
 
 /// Relative translation error ||t - t_gt||, metres (paper's RTE).
 double translation_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);

@@ -229,7 +229,8 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   const SceneModel source = apply_model_ablation(context.options->ablation, source_model->modelling.model);
   const SceneModel target = apply_model_ablation(context.options->ablation, target_model->modelling.model);
 
-  const RegistrationResult result = register_models(source, target, registration);
+  RegistrationResult result = register_models(source, target, registration);
+  check_overlap(result, *input.source, *input.target, registration.ambiguity);  // as register_clouds
   BenchMethodOutput output;
   output.transform = result.transform;
   output.status = registration_status_name(result.status);

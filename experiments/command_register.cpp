@@ -81,11 +81,7 @@ void run(const RegisterCommandOptions& options) {
               result.timings_ms.at("correspondences") + result.timings_ms.at("graphs") + result.timings_ms.at("cliques"),
               result.timings_ms.at("estimation"), result.timings_ms.at("selection"), c.source_quadrics, c.target_quadrics,
               c.correspondences, cliques.empty() ? "-" : cliques.c_str());
-  std::optional<Eigen::Vector4d> source_ground;
-  if (result.source_model.has_ground)
-    source_ground = Eigen::Vector4d(result.source_model.ground_normal.x(), result.source_model.ground_normal.y(),
-                                    result.source_model.ground_normal.z(), result.source_model.ground_offset);
-  const OverlapMeasure overlap = measure_overlap(source, target, result.transform, source_ground);
+  const OverlapMeasure overlap = *result.overlap;  // register_clouds measured it (check_overlap)
   std::printf(" | overlap %.2f (unmoved %.2f) at %.1f m", overlap.transformed, overlap.identity, overlap.distance);
   if (ground_truth) {
     const double rte = translation_error(result.transform, *ground_truth);

@@ -230,7 +230,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
                 {{"score_ratio", set(file, o.ambiguity.score_ratio)},
                  {"translation_disagreement", set(file, o.ambiguity.translation_disagreement)},
                  {"rotation_disagreement_degrees", set(file, o.ambiguity.rotation_disagreement_degrees)},
-                 {"minimum_clique_for_ok", set(file, o.ambiguity.minimum_clique_for_ok)}});
+                 {"minimum_clique_for_ok", set(file, o.ambiguity.minimum_clique_for_ok)},
+                 {"overlap_margin", set(file, o.ambiguity.overlap_margin)}});
          }}});
   if (refiner_registry().count(o.estimation.refiner) == 0)
     throw file_error(path, "key 'estimation.refiner': unknown refiner '" + o.estimation.refiner + "'");
@@ -338,6 +339,7 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
   key_value("translation_disagreement", options.ambiguity.translation_disagreement);
   key_value("rotation_disagreement_degrees", options.ambiguity.rotation_disagreement_degrees);
   key_value("minimum_clique_for_ok", options.ambiguity.minimum_clique_for_ok);
+  key_value("overlap_margin", options.ambiguity.overlap_margin);
   out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

@@ -13,7 +13,6 @@
 #include <cmath>
 #include <cstdint>
 #include <ostream>
-#include <unordered_map>
 #include <vector>
 
 namespace quadrix {
@@ -153,62 +152,6 @@ PointCloud merge_aligned_clouds(const PointCloud& source, const PointCloud& targ
   merged.labels.assign(target.size(), 0);
   merged.labels.resize(target.size() + source.size(), 1);
   return merged;
-}
-
-OverlapMeasure measure_overlap(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,
-                               const std::optional<Eigen::Vector4d>& source_ground, double distance) {
-  if (!(distance > 0.0)) throw Error("measure_overlap: distance must be positive, got " + std::to_string(distance));
-  OverlapMeasure measure;
-  measure.distance = distance;
-  // Voxel hash of the target with cells of `distance`: a neighbour within `distance` lies in one of
-  // the 27 cells around the query's cell.
-  const double inverse = 1.0 / distance;
-  const auto cell_of = [inverse](const Eigen::Vector3d& p) -> Eigen::Vector3i {
-    return (p * inverse).array().floor().cast<int>();
-  };
-  const auto key_of = [](const Eigen::Vector3i& c) {
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x()) & 0x1FFFFFu) << 42) |
-           (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y()) & 0x1FFFFFu) << 21) |
-           static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z()) & 0x1FFFFFu);
-  };
-  std::unordered_map<std::uint64_t, std::vector<Eigen::Vector3f>> cells;
-  for (std::size_t i = 0; i < target.size(); ++i) {
-    const Eigen::Vector3d p = target.point(i);
-    if (p.allFinite()) cells[key_of(cell_of(p))].push_back(p.cast<float>());
-  }
-  const auto overlaps = [&](const Eigen::Vector3d& p) {
-    const Eigen::Vector3i c = cell_of(p);
-    const float squared = static_cast<float>(distance * distance);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto found = cells.find(key_of(c + Eigen::Vector3i(dx, dy, dz)));
-          if (found == cells.end()) continue;
-          for (const Eigen::Vector3f& q : found->second)
-            if ((q - p.cast<float>()).squaredNorm() <= squared) return true;
-        }
-    return false;
-  };
-  std::vector<Eigen::Vector3d> above;
-  above.reserve(source.size());
-  for (std::size_t i = 0; i < source.size(); ++i) {
-    const Eigen::Vector3d p = source.point(i);
-    if (!p.allFinite()) continue;
-    if (source_ground && std::abs(source_ground->head<3>().dot(p) + (*source_ground)(3)) < 0.5) continue;
-    above.push_back(p);
-  }
-  const std::size_t stride = std::max<std::size_t>(1, (above.size() + 19999) / 20000);
-  std::size_t moved = 0, still = 0;
-  for (std::size_t i = 0; i < above.size(); i += stride) {
-    ++measure.sampled;
-    moved += overlaps(transform * above[i]) ? 1 : 0;
-    still += overlaps(above[i]) ? 1 : 0;
-  }
-  if (measure.sampled > 0) {
-    measure.transformed = static_cast<double>(moved) / static_cast<double>(measure.sampled);
-    measure.identity = static_cast<double>(still) / static_cast<double>(measure.sampled);
-  }
-  return measure;
 }
 
 BirdsEyeFrame birds_eye_frame(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,

@@ -171,6 +171,49 @@ TEST(RegisterModels, AWinnerOnTooSmallACliqueIsAmbiguousNotOk) {
   EXPECT_TRUE(weak.transform.isApprox(supported.transform));
 }
 
+TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
+  const std::vector<Eigen::Vector3d> world = make_street_world(13);
+  // Two scans 0.15 m and 0.3 deg apart (the 3DTK case: not moving already fits well).
+  const Eigen::Isometry3d source_pose = make_pose(0.0, {-0.15, 0.0, 1.73});
+  const Eigen::Isometry3d target_pose = make_pose(0.3, {0.0, 0.05, 1.73});
+  const PointCloud source = observe(world, source_pose);
+  const PointCloud target = observe(world, target_pose);
+  const Eigen::Isometry3d truth = target_pose.inverse() * source_pose;
+  RegistrationResult right;
+  right.status = RegistrationStatus::Ok;
+  right.transform = truth;
+  right.source_model.has_ground = true;  // the ground (z = -1.73 in the sensor frame) overlaps under any slide along it
+  right.source_model.ground_normal = Eigen::Vector3d::UnitZ();
+  right.source_model.ground_offset = 1.73;
+  right.timings_ms["total"] = 10.0;
+  check_overlap(right, source, target, AmbiguityOptions{});
+  ASSERT_TRUE(right.overlap.has_value());
+  EXPECT_EQ(right.status, RegistrationStatus::Ok);
+  EXPECT_GT(right.overlap->transformed, 0.9);
+  EXPECT_GE(right.overlap->transformed, right.overlap->identity);
+  EXPECT_GT(right.overlap->sampled, 1000u);
+  EXPECT_GE(right.timings_ms.at("total"), 10.0 + right.timings_ms.at("overlap"));
+  // A confident answer 8 m off lands less of the source on the target than leaving it in place.
+  RegistrationResult wrong = right;
+  wrong.status = RegistrationStatus::Ok;
+  wrong.message = "candidate of level 0";
+  wrong.transform = Eigen::Translation3d(8.0, 0.0, 0.0) * truth;
+  check_overlap(wrong, source, target, AmbiguityOptions{});
+  EXPECT_LT(wrong.overlap->transformed, wrong.overlap->identity - 0.15);
+  EXPECT_EQ(wrong.status, RegistrationStatus::Ambiguous);
+  EXPECT_NE(wrong.message.find("left where it is"), std::string::npos) << wrong.message;
+  EXPECT_TRUE(wrong.transform.isApprox(Eigen::Translation3d(8.0, 0.0, 0.0) * truth));  // reported, not replaced
+  // The check is a margin: switched off (negative), or an answer already not `ok`, stays as it is.
+  AmbiguityOptions off;
+  off.overlap_margin = -1.0;
+  wrong.status = RegistrationStatus::Ok;
+  check_overlap(wrong, source, target, off);
+  EXPECT_EQ(wrong.status, RegistrationStatus::Ok);
+  wrong.status = RegistrationStatus::Degenerate;
+  check_overlap(wrong, source, target, AmbiguityOptions{});
+  EXPECT_EQ(wrong.status, RegistrationStatus::Degenerate);
+}
+
 TEST(RegisterClouds, OnlyOneSideBelowDeltaAAugmentsBothSides) {
   const std::vector<Eigen::Vector3d> world = make_street_world(12);
   const Eigen::Isometry3d source_pose = make_pose(0.0, {-4.0, -0.5, 1.73});

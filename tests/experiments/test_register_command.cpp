@@ -206,6 +206,7 @@ TEST(RegistrationConfig, PrintedConfigurationRoundTripsThroughApply) {
     options.estimation.minimum_inliers = 4;
     options.ambiguity.score_ratio = 0.8125;
     options.ambiguity.minimum_clique_for_ok = 7;
+    options.ambiguity.overlap_margin = 0.3125;
     options.source_extraction.trunks.enabled = !options.source_extraction.trunks.enabled;
     options.source_extraction.planes.cluster_plane_area = 0.75;
     const std::string yaml = registration_config_yaml(options);
