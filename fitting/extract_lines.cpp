@@ -15,6 +15,9 @@
 namespace quadrix {
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRadiansPerDegree = kPi / 180.0;
+
 struct LineModel {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
@@ -33,7 +36,7 @@ std::vector<Element> extract_lines(const Eigen::Matrix3Xd& points, const std::ve
   std::vector<Element> lines;
   remaining = cluster;
   const Eigen::Vector3d up = up_axis.normalized();
-  const double cos_tilt = std::cos(std::min(options.max_tilt_deg, 90.0) * 3.14159265358979323846 / 180.0);
+  const double cos_tilt = std::cos(std::min(options.max_tilt_deg, 90.0) * kRadiansPerDegree);
   // Deterministic per cluster: the seed mixes in the first index, so the result does not depend on
   // the order clusters are processed in (they run in parallel).
   std::mt19937_64 engine(options.seed ^ (cluster.empty() ? 0u : 0x9E3779B97F4A7C15ull * (cluster.front() + 1)));
@@ -218,8 +221,9 @@ bool stem_reaches_top_of_view(const Eigen::Matrix3Xd& points, const std::vector<
     top_tangent = std::max(top_tangent, d.dot(up) / length);
   }
   // Elevation angles compared through their tangents (tan is increasing below 90 degrees).
-  const double tolerance = options.crownless_top_tolerance_deg * 3.14159265358979323846 / 180.0;
-  const double limit_tangent = std::tan(std::min(std::atan(top_tangent) + tolerance, 1.5707963));
+  // Elevations are capped just below 90 degrees, where the tangent stays finite.
+  const double tolerance = options.crownless_top_tolerance_deg * kRadiansPerDegree;
+  const double limit_tangent = std::tan(std::min(std::atan(top_tangent) + tolerance, 0.5 * kPi - 1e-7));
   for (const std::uint32_t index : cloud) {
     const Eigen::Vector3d d = points.col(index) - sensor_origin;
     const double height = d.dot(up);
