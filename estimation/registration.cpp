@@ -321,6 +321,76 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
   if (const auto total = result.timings_ms.find("total"); total != result.timings_ms.end()) total->second += ms;
 }
 
+namespace {
+
+// The points of `cloud` within the extraction's range limits around its sensor (as extract_elements crops).
+PointCloud crop_to_range(const PointCloud& cloud, const ExtractionOptions& extraction) {
+  const double minimum_squared = extraction.minimum_range * extraction.minimum_range;
+  const double maximum_squared = extraction.maximum_range > 0.0 ? extraction.maximum_range * extraction.maximum_range : 1e300;
+  std::vector<Eigen::Index> kept;
+  kept.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const double squared = (cloud.point(i) - extraction.sensor_origin).squaredNorm();
+    if (squared >= minimum_squared && squared <= maximum_squared) kept.push_back(static_cast<Eigen::Index>(i));
+  }
+  PointCloud cropped;
+  cropped.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i) cropped.positions.col(static_cast<Eigen::Index>(i)) = cloud.positions.col(kept[i]);
+  return cropped;
+}
+
+}  // namespace
+
+void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                         const RegistrationOptions& options) {
+  const PointCloud cropped_source = crop_to_range(source, options.source_extraction);
+  const PointCloud cropped_target = crop_to_range(target, options.target_extraction);
+  if (result.status == RegistrationStatus::Ambiguous && options.dense_search.enabled && !cropped_source.empty() &&
+      !cropped_target.empty()) {
+    const Clock::time_point start = Clock::now();
+    std::vector<Eigen::Isometry3d> other_starts;
+    for (std::size_t i = 0; i < result.candidates.size(); ++i)
+      if (result.candidates[i].valid && i != result.best_candidate) other_starts.push_back(result.candidates[i].transform);
+    std::optional<Eigen::Vector3d> up;
+    if (result.target_model.has_ground) up = result.target_model.ground_normal;
+    std::optional<Eigen::Vector4d> source_ground;
+    if (result.source_model.has_ground)
+      source_ground = Eigen::Vector4d(result.source_model.ground_normal.x(), result.source_model.ground_normal.y(),
+                                      result.source_model.ground_normal.z(), result.source_model.ground_offset);
+    const DenseSearchResult search = search_weakest_direction(
+        cropped_source, cropped_target, result.transform, other_starts, up, source_ground,
+        options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
+    const DenseOptimum& best = search.optima[search.best];
+    std::ostringstream why;
+    why.precision(3);
+    why << "; dense search along (" << search.weakest_direction.x() << ", " << search.weakest_direction.y() << ", "
+        << search.weakest_direction.z() << "): best from " << best.start << " (overlap " << best.overlap << ", "
+        << translation_error(best.transform, result.transform) << " m from the quadric answer)";
+    if (search.rival) {
+      const DenseOptimum& rival = search.optima[*search.rival];
+      why << ", best distinct optimum from " << rival.start << " at " << translation_error(rival.transform, best.transform)
+          << " m (overlap " << rival.overlap << ")";
+    } else {
+      why << ", every start reached it";
+    }
+    if (search.margin >= options.dense_search.decisive_margin) {
+      result.transform = best.transform;
+      result.status = RegistrationStatus::Ok;
+      why << ": settled (margin " << search.margin << ")";
+    } else {
+      // Not settled: the points do not single out an optimum either, so the quadric answer stands.
+      why << ": not settled (margin " << search.margin << " < " << options.dense_search.decisive_margin
+          << "), the quadric answer stands";
+    }
+    result.message += why.str();
+    result.dense_search = search;
+    const double ms = elapsed_ms(start);
+    result.timings_ms["dense_search"] = ms;
+    if (const auto total = result.timings_ms.find("total"); total != result.timings_ms.end()) total->second += ms;
+  }
+  check_overlap(result, cropped_source, cropped_target, options.ambiguity);
+}
+
 bool lacks_augmentation_of(const SceneModel& model, const SceneModel& other) {
   return model.augmented_count() == 0 && other.augmented_count() > 0;
 }
@@ -358,7 +428,7 @@ RegistrationResult register_clouds(const PointCloud& source, const PointCloud& t
   }
 
   RegistrationResult result = register_models(source_modelling.model, target_modelling.model, options);
-  check_overlap(result, source, target, options.ambiguity);
+  verify_registration(result, source, target, options);
   result.timings_ms["modelling_source"] = source_ms;
   result.timings_ms["modelling_target"] = target_ms;
   result.timings_ms["total"] = elapsed_ms(start);

@@ -12,6 +12,7 @@
 #pragma once
 
 #include "estimation/candidate_selection.h"
+#include "estimation/dense_search.h"
 #include "estimation/overlap.h"
 #include "estimation/refiner.h"
 #include "fitting/extraction.h"
@@ -79,6 +80,7 @@ struct RegistrationOptions {
   EstimationOptions estimation;               ///< candidate estimation
   SelectionOptions selection;                 ///< Φ = 0.5 DCS, δ_g^e = 5 deg (ground normals are filled in by the pipeline)
   AmbiguityOptions ambiguity;                 ///< when the answer is reported as ambiguous
+  DenseSearchOptions dense_search;            ///< the ICP search that settles an ambiguous answer (verify_registration)
 };
 
 /// One transformation candidate T_k (one per clique level).
@@ -128,6 +130,7 @@ struct RegistrationResult {
   SceneModel source_model;                                      ///< R_x
   SceneModel target_model;                                      ///< R_y
   std::optional<OverlapMeasure> overlap;                        ///< dense overlap of the answer (check_overlap: register_clouds and the benchmark)
+  std::optional<DenseSearchResult> dense_search;                ///< the search along the weakest direction, when an ambiguous answer ran it
 };
 
 /// The factor options of candidate estimation between two models (Algorithm 1): Augment(), f_pp over
@@ -167,6 +170,14 @@ RegistrationResult register_clouds(const PointCloud& source, const PointCloud& t
 /// to "total"). register_clouds and the benchmark call it after register_models.
 void check_overlap(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                    const AmbiguityOptions& options);
+
+/// Verification after selection (register_clouds and the benchmark): crops both clouds to their
+/// extraction's range limits around the sensor (the platform's own hits are not scene), settles an
+/// `ambiguous` answer with search_weakest_direction when `options.dense_search.enabled` (when the
+/// best optimum beats every distinct optimum's overlap by `decisive_margin` it becomes the answer,
+/// `ok`; otherwise the quadric answer stands, `ambiguous`), then check_overlap. Adds "dense_search" and "overlap" timings (also to "total").
+void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                         const RegistrationOptions& options);
 
 /// Relative translation error ||t - t_gt||, metres (paper's RTE).
 double translation_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);

@@ -230,7 +230,10 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   const SceneModel target = apply_model_ablation(context.options->ablation, target_model->modelling.model);
 
   RegistrationResult result = register_models(source, target, registration);
-  check_overlap(result, *input.source, *input.target, registration.ambiguity);  // as register_clouds
+  // As register_clouds; a perturbed source's sensor sits at the perturbation's origin (its range crop).
+  RegistrationOptions verification = registration;
+  if (perturbed) verification.source_extraction.sensor_origin = input.perturbation * registration.source_extraction.sensor_origin;
+  verify_registration(result, *input.source, *input.target, verification);
   BenchMethodOutput output;
   output.transform = result.transform;
   output.status = registration_status_name(result.status);

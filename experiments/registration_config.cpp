@@ -232,6 +232,18 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
                  {"rotation_disagreement_degrees", set(file, o.ambiguity.rotation_disagreement_degrees)},
                  {"minimum_clique_for_ok", set(file, o.ambiguity.minimum_clique_for_ok)},
                  {"overlap_margin", set(file, o.ambiguity.overlap_margin)}});
+         }},
+        {"dense_search", [&](const YAML::Node& value, const std::string& key) {
+           walk(value, file, key,
+                {{"enabled", set(file, o.dense_search.enabled)},
+                 {"voxel_size", set(file, o.dense_search.voxel_size)},
+                 {"source_samples", set(file, o.dense_search.source_samples)},
+                 {"normal_neighbours", set(file, o.dense_search.normal_neighbours)},
+                 {"correspondence_distance", set(file, o.dense_search.correspondence_distance)},
+                 {"iterations", set(file, o.dense_search.iterations)},
+                 {"step", set(file, o.dense_search.step)},
+                 {"range", set(file, o.dense_search.range)},
+                 {"decisive_margin", set(file, o.dense_search.decisive_margin)}});
          }}});
   if (refiner_registry().count(o.estimation.refiner) == 0)
     throw file_error(path, "key 'estimation.refiner': unknown refiner '" + o.estimation.refiner + "'");
@@ -340,6 +352,17 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
   key_value("rotation_disagreement_degrees", options.ambiguity.rotation_disagreement_degrees);
   key_value("minimum_clique_for_ok", options.ambiguity.minimum_clique_for_ok);
   key_value("overlap_margin", options.ambiguity.overlap_margin);
+  out << YAML::EndMap;
+  begin("dense_search");
+  key_value("enabled", options.dense_search.enabled);
+  key_value("voxel_size", options.dense_search.voxel_size);
+  key_value("source_samples", options.dense_search.source_samples);
+  key_value("normal_neighbours", options.dense_search.normal_neighbours);
+  key_value("correspondence_distance", options.dense_search.correspondence_distance);
+  key_value("iterations", options.dense_search.iterations);
+  key_value("step", options.dense_search.step);
+  key_value("range", options.dense_search.range);
+  key_value("decisive_margin", options.dense_search.decisive_margin);
   out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }

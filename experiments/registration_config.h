@@ -38,7 +38,9 @@ std::string registration_presets_directory();
 ///   estimation: {refiner, max_iterations, function_tolerance, manhattan_tolerance_degrees,
 ///                augment_non_central, use_ground_constraint, ground_weight, minimum_inliers}
 ///   selection: {dcs_phi, manhattan_tolerance_degrees}
-///   ambiguity: {score_ratio, translation_disagreement, rotation_disagreement_degrees}
+///   ambiguity: {score_ratio, translation_disagreement, rotation_disagreement_degrees, minimum_clique_for_ok, overlap_margin}
+///   dense_search: {enabled, voxel_size, source_samples, normal_neighbours, correspondence_distance, iterations,
+///                  step, range, decisive_margin}
 /// Throws quadrix::Error naming the file and the key for unknown keys, wrong types or unreadable files.
 void apply_registration_config(const std::string& path, RegistrationOptions& options, const std::string& side = "both");
 

@@ -125,6 +125,23 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                          {"transformed", context.overlap->transformed},
                          {"identity", context.overlap->identity},
                          {"sampled_points", context.overlap->sampled}};
+  if (result.dense_search) {
+    const DenseSearchResult& search = *result.dense_search;
+    nlohmann::json optima = nlohmann::json::array();
+    for (const DenseOptimum& optimum : search.optima)
+      optima.push_back({{"start", optimum.start},
+                        {"overlap", optimum.overlap},
+                        {"median_residual_m", optimum.median_residual},
+                        {"transform", matrix_json(optimum.transform)}});
+    report["dense_search"] = {{"weakest_direction", {search.weakest_direction.x(), search.weakest_direction.y(), search.weakest_direction.z()}},
+                              {"weakest_share", search.weakest_share},
+                              {"best", search.best},
+                              {"rival", search.rival ? nlohmann::json(*search.rival) : nlohmann::json(nullptr)},
+                              {"margin", search.margin},
+                              {"source_points", search.source_points},
+                              {"target_points", search.target_points},
+                              {"optima", optima}};
+  }
   if (context.ground_truth) {
     report["ground_truth"] = {{"transform", matrix_json(*context.ground_truth)},
                               {"rte_m", translation_error(result.transform, *context.ground_truth)},

@@ -35,7 +35,9 @@ struct RegistrationReportContext {
 /// level: level, threshold_m, clique_size, refinement_status, valid, selected, score, pair_count,
 /// filtered_count, term_count, factor_count, transform, note), "best_to_second_ratio", "input"
 /// (paths and presets), with a ground truth "ground_truth" {transform, rte_m, rre_deg, success}, and
-/// with a measured overlap "overlap" {distance_m, transformed, identity, sampled_points}.
+/// with a measured overlap "overlap" {distance_m, transformed, identity, sampled_points}; when the
+/// dense search ran, "dense_search" {weakest_direction, weakest_share, best, rival, margin,
+/// source_points, target_points, optima: [{start, overlap, median_residual_m, transform}]}.
 std::string registration_report_json(const RegistrationResult& result, const RegistrationReportContext& context);
 
 /// Writes registration_report_json atomically to `path`.

@@ -94,4 +94,16 @@ std::optional<Neighbor> PointIndex::nearest_not_excluded(const Eigen::Vector3d& 
   return result.result();
 }
 
+std::vector<Neighbor> PointIndex::nearest(const Eigen::Vector3d& query, std::size_t count) const {
+  count = std::min(count, size());
+  std::vector<Neighbor> found;
+  if (count == 0) return found;
+  std::vector<std::size_t> indices(count);
+  std::vector<double> squared(count);
+  count = tree_->tree.knnSearch(query.data(), count, indices.data(), squared.data());
+  found.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) found.push_back(Neighbor{indices[i], std::sqrt(squared[i])});
+  return found;
+}
+
 }  // namespace quadrix

@@ -1,5 +1,6 @@
 // Exact nearest-neighbour search over a fixed set of 3-D points (a k-d tree; nanoflann stays in
-// the .cpp). Used wherever a stage needs the nearest of many points: SNN in candidate selection.
+// the .cpp). Used wherever a stage needs the nearest of many points: SNN in candidate selection,
+// point-to-plane alignment and normals in the dense search.
 #pragma once
 
 #include <Eigen/Core>
@@ -36,6 +37,8 @@ class PointIndex {
   /// every point is excluded. `excluded` has size() entries (else quadrix::Error). Used for greedy
   /// one-to-one assignment: excluded points cost one flag test when the search reaches them.
   std::optional<Neighbor> nearest_not_excluded(const Eigen::Vector3d& query, const std::vector<bool>& excluded) const;
+  /// The `count` nearest points to `query`, nearest first (fewer when the index holds fewer).
+  std::vector<Neighbor> nearest(const Eigen::Vector3d& query, std::size_t count) const;
 
  private:
   struct Tree;

@@ -207,6 +207,10 @@ TEST(RegistrationConfig, PrintedConfigurationRoundTripsThroughApply) {
     options.ambiguity.score_ratio = 0.8125;
     options.ambiguity.minimum_clique_for_ok = 7;
     options.ambiguity.overlap_margin = 0.3125;
+    options.dense_search.enabled = false;
+    options.dense_search.step = 0.75;
+    options.dense_search.source_samples = 2500;
+    options.dense_search.decisive_margin = 0.0625;
     options.source_extraction.trunks.enabled = !options.source_extraction.trunks.enabled;
     options.source_extraction.planes.cluster_plane_area = 0.75;
     const std::string yaml = registration_config_yaml(options);
@@ -258,6 +262,24 @@ TEST(RegistrationReport, JsonFollowsTheContractAndPicturesAreWritten) {
   EXPECT_TRUE(report["candidates"][1]["selected"].get<bool>());
   EXPECT_NEAR(report["ground_truth"]["rte_m"].get<double>(), std::sqrt(14.0), 1e-12);
   EXPECT_TRUE(report["ground_truth"]["success"].is_boolean());
+  EXPECT_FALSE(report.contains("dense_search")) << "only when the search ran";
+
+  DenseSearchResult search;
+  search.weakest_direction = Eigen::Vector3d(0.0, 1.0, 0.0);
+  search.optima.resize(2);
+  search.optima[1].start = "answer+2.0m";
+  search.optima[1].overlap = 0.625;
+  search.best = 1;
+  search.rival = 0;
+  search.margin = 0.5;
+  result.dense_search = search;
+  const nlohmann::json searched = nlohmann::json::parse(registration_report_json(result, context));
+  ASSERT_EQ(searched["dense_search"]["optima"].size(), 2u);
+  EXPECT_EQ(searched["dense_search"]["optima"][1]["start"], "answer+2.0m");
+  EXPECT_DOUBLE_EQ(searched["dense_search"]["optima"][1]["overlap"].get<double>(), 0.625);
+  EXPECT_EQ(searched["dense_search"]["best"], 1);
+  EXPECT_EQ(searched["dense_search"]["rival"], 0);
+  EXPECT_DOUBLE_EQ(searched["dense_search"]["weakest_direction"][1].get<double>(), 1.0);
 
   PointCloud source;
   source.positions = Eigen::Matrix3Xf::Random(3, 500) * 20.0f;

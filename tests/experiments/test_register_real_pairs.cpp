@@ -46,9 +46,11 @@ TEST(RegisterRealPairs, NonKittiPairsAreSolvedOrFlaggedNeverConfidentlyWrong) {
       EXPECT_TRUE(success) << "confident wrong answer: RTE " << translation_error(result.transform, truth) << " m, RRE "
                            << rotation_error_degrees(result.transform, truth) << " deg";
     }
-    // Measured to succeed (README "Registration" table): the HDL-32E pair, and 3DTK 2->1, which
-    // the identity does not solve to 0.2 m (it is 1.8 m off).
-    if (pair.id == "hdl32_local" || pair.id == "3dtk_2_to_1") {
+    // Measured to succeed (README "Registration" table): the HDL-32E pair and all three 3DTK pairs,
+    // `ok` and within 0.5 m, where the identity is 1.6-3.4 m off (1->0 and 2->0 are settled by the
+    // dense search along the weakest direction; the ground truth is good to 5-20 cm).
+    if (pair.id == "hdl32_local" || pair.id.rfind("3dtk", 0) == 0) {
+      EXPECT_EQ(result.status, RegistrationStatus::Ok) << result.message;
       EXPECT_TRUE(success) << "RTE " << translation_error(result.transform, truth) << " m, RRE "
                            << rotation_error_degrees(result.transform, truth) << " deg";
       EXPECT_LT(translation_error(result.transform, truth), 0.5);

@@ -1,4 +1,5 @@
-// PointIndex (k-d tree): nearest point not excluded, against brute force on random clouds with exact ties.
+// PointIndex (k-d tree): nearest point not excluded and the k nearest, against brute force on random
+// clouds (with exact ties for the former).
 #include "geometry/error.h"
 #include "geometry/spatial_index.h"
 
@@ -51,6 +52,27 @@ TEST(PointIndex, NearestNotExcludedMatchesBruteForceWithTies) {
   }
   const PointIndex index(Eigen::Matrix3Xd::Zero(3, 3));
   EXPECT_THROW(index.nearest_not_excluded(Eigen::Vector3d::Zero(), std::vector<bool>(2)), Error);
+}
+
+TEST(PointIndex, KNearestMatchBruteForceDistances) {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int count = std::uniform_int_distribution<int>(1, 400)(rng);
+    Eigen::Matrix3Xd points(3, count);
+    for (int i = 0; i < count; ++i)
+      for (int d = 0; d < 3; ++d) points(d, i) = std::uniform_real_distribution<double>(-10, 10)(rng);
+    const PointIndex index(points);
+    const Eigen::Vector3d query = Eigen::Vector3d::Random() * 12.0;
+    const std::size_t k = std::uniform_int_distribution<std::size_t>(1, 15)(rng);
+    const std::vector<Neighbor> expected = brute_force(points, query);
+    const std::vector<Neighbor> actual = index.nearest(query, k);
+    ASSERT_EQ(actual.size(), std::min<std::size_t>(k, count)) << "trial " << trial;
+    for (std::size_t i = 0; i < actual.size(); ++i) {
+      EXPECT_NEAR(actual[i].distance, expected[i].distance, 1e-12) << "trial " << trial << " rank " << i;
+      EXPECT_NEAR((points.col(static_cast<Eigen::Index>(actual[i].index)) - query).norm(), actual[i].distance, 1e-12);
+    }
+  }
+  EXPECT_TRUE(PointIndex(Eigen::Matrix3Xd(3, 0)).nearest(Eigen::Vector3d::Zero(), 3).empty());
 }
 
 TEST(PointIndex, EmptyIndexAndBadInput) {

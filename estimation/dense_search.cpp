@@ -1,0 +1,224 @@
+// Dense search that settles an ambiguous answer (see dense_search.h).
+#include "estimation/dense_search.h"
+
+#include "estimation/registration.h"
+#include "geometry/spatial_index.h"
+
+#include <Eigen/Eigenvalues>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <iomanip>
+#include <sstream>
+#include <unordered_set>
+
+namespace quadrix {
+
+namespace {
+
+// One point per occupied cube of edge `voxel` (the first met), as a 3×N matrix.
+Eigen::Matrix3Xd thin(const PointCloud& cloud, double voxel) {
+  std::unordered_set<std::uint64_t> occupied;
+  occupied.reserve(cloud.size());
+  std::vector<Eigen::Vector3d> kept;
+  kept.reserve(cloud.size() / 2);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d p = cloud.point(i);
+    if (!p.allFinite()) continue;
+    const Eigen::Vector3i c = (p / voxel).array().floor().cast<int>();
+    const std::uint64_t key = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x()) & 0x1FFFFFu) << 42) |
+                              (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y()) & 0x1FFFFFu) << 21) |
+                              static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z()) & 0x1FFFFFu);
+    if (occupied.insert(key).second) kept.push_back(p);
+  }
+  Eigen::Matrix3Xd points(3, static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i) points.col(static_cast<Eigen::Index>(i)) = kept[i];
+  return points;
+}
+
+PointCloud as_cloud(const Eigen::Matrix3Xd& points) {
+  PointCloud cloud;
+  cloud.positions = points.cast<float>();
+  return cloud;
+}
+
+// Both clouds thinned, the source sampled, the target indexed with a normal per point.
+struct PreparedPair {
+  Eigen::Matrix3Xd source;   // thinned and sampled source points
+  PointCloud source_cloud;   // the same, for measure_overlap
+  PointCloud target_cloud;   // thinned target, for measure_overlap
+  PointIndex target_index{Eigen::Matrix3Xd(3, 0)};
+  Eigen::Matrix3Xd target_normals;
+};
+
+PreparedPair prepare(const PointCloud& source, const PointCloud& target, const DenseSearchOptions& options) {
+  PreparedPair pair;
+  const Eigen::Matrix3Xd thinned_source = thin(source, options.voxel_size);
+  const Eigen::Index samples = std::min<Eigen::Index>(thinned_source.cols(), static_cast<Eigen::Index>(std::max<std::size_t>(options.source_samples, 1)));
+  pair.source.resize(3, samples);
+  for (Eigen::Index i = 0; i < samples; ++i) pair.source.col(i) = thinned_source.col(i * thinned_source.cols() / std::max<Eigen::Index>(samples, 1));
+  pair.source_cloud = as_cloud(pair.source);
+  Eigen::Matrix3Xd thinned_target = thin(target, options.voxel_size);
+  pair.target_cloud = as_cloud(thinned_target);
+  pair.target_index = PointIndex(thinned_target);
+  const Eigen::Index count = pair.target_index.points().cols();
+  pair.target_normals.resize(3, count);
+  // A normal per target point: the least-variance direction of its nearest neighbours' plane fit.
+  tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index i) {
+    const std::vector<Neighbor> neighbours = pair.target_index.nearest(pair.target_index.points().col(i), options.normal_neighbours);
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const Neighbor& n : neighbours) mean += pair.target_index.points().col(static_cast<Eigen::Index>(n.index));
+    mean /= static_cast<double>(std::max<std::size_t>(neighbours.size(), 1));
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (const Neighbor& n : neighbours) {
+      const Eigen::Vector3d d = pair.target_index.points().col(static_cast<Eigen::Index>(n.index)) - mean;
+      scatter += d * d.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+    solver.computeDirect(scatter);
+    pair.target_normals.col(i) = neighbours.size() >= 3 ? Eigen::Vector3d(solver.eigenvectors().col(0)) : Eigen::Vector3d::Zero();
+  });
+  return pair;
+}
+
+// The point-to-plane pairs of `transform`: the rows of J (d residual / d [rotation, translation])
+// and the residuals n·(T p − q), for source points whose nearest target point is close enough.
+struct Linearisation {
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero();
+  std::vector<double> residuals;
+};
+
+Linearisation linearise(const PreparedPair& pair, const Eigen::Isometry3d& transform, double maximum_distance) {
+  Linearisation result;
+  result.residuals.reserve(static_cast<std::size_t>(pair.source.cols()));
+  for (Eigen::Index i = 0; i < pair.source.cols(); ++i) {
+    const Eigen::Vector3d p = transform * Eigen::Vector3d(pair.source.col(i));
+    const std::vector<Neighbor> nearest = pair.target_index.nearest(p, 1);
+    if (nearest.empty() || nearest.front().distance > maximum_distance) continue;
+    const Eigen::Vector3d n = pair.target_normals.col(static_cast<Eigen::Index>(nearest.front().index));
+    if (n.isZero()) continue;
+    const double residual = n.dot(p - pair.target_index.points().col(static_cast<Eigen::Index>(nearest.front().index)));
+    Eigen::Matrix<double, 6, 1> row;
+    row << p.cross(n), n;  // d/dω of n·(exp(ω)p + τ) at 0, then d/dτ
+    result.information += row * row.transpose();
+    result.gradient += row * residual;
+    result.residuals.push_back(std::abs(residual));
+  }
+  return result;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+DenseOptimum run_icp(const PreparedPair& pair, const Eigen::Isometry3d& start, const DenseSearchOptions& options) {
+  DenseOptimum optimum;
+  optimum.transform = start;
+  for (std::size_t iteration = 0; iteration < options.iterations; ++iteration) {
+    const Linearisation system = linearise(pair, optimum.transform, options.correspondence_distance);
+    if (system.residuals.size() < 6) break;
+    // Gauss-Newton step with a tiny damping so a rank-deficient corridor does not blow up.
+    const Eigen::Matrix<double, 6, 6> damped = system.information + 1e-6 * system.information.trace() * Eigen::Matrix<double, 6, 6>::Identity();
+    const Eigen::Matrix<double, 6, 1> step = -damped.ldlt().solve(system.gradient);
+    if (!step.allFinite()) break;
+    Eigen::Isometry3d update = Eigen::Isometry3d::Identity();
+    const double angle = step.head<3>().norm();
+    if (angle > 0.0) update.linear() = Eigen::AngleAxisd(angle, step.head<3>() / angle).toRotationMatrix();
+    update.translation() = step.tail<3>();
+    optimum.transform = update * optimum.transform;
+    if (angle < 1e-5 && step.tail<3>().norm() < 1e-4) break;
+  }
+  optimum.median_residual = median(linearise(pair, optimum.transform, options.correspondence_distance).residuals);
+  return optimum;
+}
+
+std::string shift_name(double shift) {
+  std::ostringstream name;
+  name << "answer" << std::showpos << std::fixed << std::setprecision(1) << shift << "m";
+  return name.str();
+}
+
+}  // namespace
+
+DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& start,
+                                  const DenseSearchOptions& options) {
+  const PreparedPair pair = prepare(source, target, options);
+  DenseOptimum optimum = run_icp(pair, start, options);
+  optimum.start = "given";
+  optimum.overlap = measure_overlap(pair.source_cloud, pair.target_cloud, optimum.transform).transformed;
+  return optimum;
+}
+
+DenseSearchResult search_weakest_direction(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& answer,
+                                           const std::vector<Eigen::Isometry3d>& other_starts,
+                                           const std::optional<Eigen::Vector3d>& up,
+                                           const std::optional<Eigen::Vector4d>& source_ground,
+                                           double translation_disagreement, double rotation_disagreement_degrees,
+                                           const DenseSearchOptions& options) {
+  DenseSearchResult result;
+  const PreparedPair pair = prepare(source, target, options);
+  result.source_points = static_cast<std::size_t>(pair.source.cols());
+  result.target_points = static_cast<std::size_t>(pair.target_index.points().cols());
+
+  // The weakest direction: the least-constrained translation of the point-to-plane information at
+  // the answer (its translation block is the sum of n nᵀ over the pairs), kept along the ground.
+  const Linearisation at_answer = linearise(pair, answer, options.correspondence_distance);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(at_answer.information.bottomRightCorner<3, 3>());
+  Eigen::Vector3d direction = solver.eigenvectors().col(0);
+  if (up && up->norm() > 0.0) {
+    // Restricted to the ground plane: the 2×2 information in an orthonormal basis orthogonal to up.
+    const Eigen::Vector3d u = up->normalized();
+    Eigen::Matrix<double, 3, 2> basis;
+    basis.col(0) = u.unitOrthogonal();
+    basis.col(1) = u.cross(basis.col(0));
+    const Eigen::Matrix2d along_ground = basis.transpose() * at_answer.information.bottomRightCorner<3, 3>() * basis;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ground_solver(along_ground);
+    direction = basis * ground_solver.eigenvectors().col(0);
+  }
+  result.weakest_direction = direction.normalized();
+  const double largest = solver.eigenvalues()(2);
+  result.weakest_share = largest > 0.0 ? (result.weakest_direction.transpose() * at_answer.information.bottomRightCorner<3, 3>() *
+                                          result.weakest_direction)(0) / largest
+                                       : 0.0;
+
+  std::vector<Eigen::Isometry3d> starts;
+  std::vector<std::string> names;
+  const long reach = options.step > 0.0 ? static_cast<long>(std::floor(options.range / options.step + 1e-9)) : 0;
+  for (long k = -reach; k <= reach; ++k) {
+    Eigen::Isometry3d start = answer;
+    start.pretranslate(static_cast<double>(k) * options.step * result.weakest_direction);
+    starts.push_back(start);
+    names.push_back(shift_name(static_cast<double>(k) * options.step));
+  }
+  for (std::size_t i = 0; i < other_starts.size(); ++i) {
+    starts.push_back(other_starts[i]);
+    names.push_back("candidate " + std::to_string(i));
+  }
+  starts.push_back(Eigen::Isometry3d::Identity());
+  names.push_back("identity");
+
+  result.optima.resize(starts.size());
+  tbb::parallel_for(std::size_t(0), starts.size(), [&](std::size_t i) {
+    result.optima[i] = run_icp(pair, starts[i], options);
+    result.optima[i].start = names[i];
+    result.optima[i].overlap = measure_overlap(pair.source_cloud, pair.target_cloud, result.optima[i].transform, source_ground).transformed;
+  });
+  for (std::size_t i = 1; i < result.optima.size(); ++i)
+    if (result.optima[i].overlap > result.optima[result.best].overlap) result.best = i;
+  const Eigen::Isometry3d& best = result.optima[result.best].transform;
+  for (std::size_t i = 0; i < result.optima.size(); ++i) {
+    const bool disagrees = translation_error(result.optima[i].transform, best) > translation_disagreement ||
+                           rotation_error_degrees(result.optima[i].transform, best) > rotation_disagreement_degrees;
+    if (disagrees && (!result.rival || result.optima[i].overlap > result.optima[*result.rival].overlap)) result.rival = i;
+  }
+  result.margin = result.optima[result.best].overlap - (result.rival ? result.optima[*result.rival].overlap : 0.0);
+  return result;
+}
+
+}  // namespace quadrix

@@ -1,0 +1,75 @@
+// Dense search that settles an ambiguous answer (beyond the paper, which stops at selection; its
+// failure cases are scenes whose structure barely fixes one translation, such as a long wall that
+// repeats along the motion). The quadrics then support several answers a few metres apart, or
+// only one wrong one. The points still tell them apart: point-to-plane ICP is started from the
+// answer shifted along the direction the target's surfaces constrain least, from the other quadric
+// candidates and from not moving, and the local optimum that puts the most source points on the
+// target wins. It is `ok` only when it beats every distinct optimum by a clear margin.
+#pragma once
+
+#include "estimation/overlap.h"
+#include "geometry/point_cloud.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace quadrix {
+
+/// Options of search_weakest_direction.
+struct DenseSearchOptions {
+  bool enabled = true;                   ///< register_clouds runs the search on `ambiguous` answers
+  double voxel_size = 0.15;              ///< both clouds are thinned to one point per cube of this edge, m
+  std::size_t source_samples = 3000;     ///< source points ICP aligns (an even stride over the thinned source)
+  std::size_t normal_neighbours = 10;    ///< target neighbours of each target normal's plane fit
+  double correspondence_distance = 0.5;  ///< ICP drops pairs farther apart than this, m
+  std::size_t iterations = 20;           ///< point-to-plane Gauss-Newton iterations per start (fewer when converged)
+  double step = 1.0;                     ///< spacing of the starts along the weakest direction, m
+  double range = 8.0;                    ///< the starts reach this far either side of the answer, m
+  double decisive_margin = 0.03;         ///< the winner's overlap must beat every distinct optimum's by this to be `ok` (3 standard errors of a difference of two 5,000-sample fractions)
+};
+
+/// Where one ICP run started and where it ended.
+struct DenseOptimum {
+  std::string start;                                            ///< "answer+2.0m" (shift along the weakest direction), "candidate 1", "identity"
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< the local optimum ICP reached
+  double overlap = 0.0;                                         ///< measure_overlap's fraction there (same sampling for every optimum)
+  double median_residual = 0.0;                                 ///< median point-to-plane distance of its ICP pairs, m
+};
+
+/// What search_weakest_direction found.
+struct DenseSearchResult {
+  Eigen::Vector3d weakest_direction = Eigen::Vector3d::UnitX();  ///< unit translation the target's normals constrain least (target frame)
+  double weakest_share = 0.0;                                    ///< its eigenvalue over the largest of the translation information, [0, 1]
+  std::vector<DenseOptimum> optima;                              ///< one per start, in start order
+  std::size_t best = 0;                                          ///< index of the highest overlap in `optima`
+  std::optional<std::size_t> rival;                              ///< the highest-overlap optimum that disagrees with the best, if any
+  double margin = 0.0;                                           ///< best overlap minus the rival's (the best overlap when there is no rival)
+  std::size_t source_points = 0;                                 ///< thinned source points ICP aligned
+  std::size_t target_points = 0;                                 ///< thinned target points with a normal
+};
+
+/// Aligns `source` to `target` by point-to-plane ICP from `start` (Gauss-Newton on the linearised
+/// rotation, pairs by nearest target point within `options.correspondence_distance`). Both are
+/// thinned by `options.voxel_size`; target normals come from plane fits over the nearest
+/// `options.normal_neighbours` points. Returns the optimum and its median residual.
+DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& start,
+                                  const DenseSearchOptions& options = {});
+
+/// Runs ICP from `answer` shifted by k·step (|k·step| ≤ range) along the weakest translation
+/// direction of the target's normals at `answer` (orthogonal to `up` when given: motions along the
+/// ground), from each of `other_starts`, and from the identity; scores every optimum by
+/// measure_overlap (points near `source_ground` skipped) and names the best and its best distinct
+/// rival (farther than `translation_disagreement` m or `rotation_disagreement_degrees` apart).
+DenseSearchResult search_weakest_direction(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& answer,
+                                           const std::vector<Eigen::Isometry3d>& other_starts,
+                                           const std::optional<Eigen::Vector3d>& up,
+                                           const std::optional<Eigen::Vector4d>& source_ground,
+                                           double translation_disagreement, double rotation_disagreement_degrees,
+                                           const DenseSearchOptions& options = {});
+
+}  // namespace quadrix

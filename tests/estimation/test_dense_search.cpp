@@ -1,0 +1,194 @@
+// The dense search that settles an ambiguous answer (estimation/dense_search.h, verify_registration):
+// point-to-plane ICP against a known transform, a colonnade that repeats along the motion but ends
+// in a curved wall (settled at the truth), and a featureless corridor (not settled: the quadric
+// answer stands, `ambiguous`). Scenes are sampled at random, each cloud on its own.
+#include "estimation/dense_search.h"
+#include "estimation/registration.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <random>
+#include <vector>
+
+namespace quadrix {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A surface sampler: a uniform random point of the surface (world frame).
+using Surface = std::function<Eigen::Vector3d(std::mt19937&)>;
+
+Surface rectangle(const Eigen::Vector3d& corner, const Eigen::Vector3d& side_a, const Eigen::Vector3d& side_b) {
+  return [=](std::mt19937& rng) {
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    return Eigen::Vector3d(corner + unit(rng) * side_a + unit(rng) * side_b);
+  };
+}
+
+// Samples `count` points over `surfaces` (weighted by `areas`) that lie within `range` of `sensor`
+// (world frame), adds 1 cm noise and expresses them in the sensor's frame `world_from_sensor`.
+PointCloud scan(const std::vector<Surface>& surfaces, const std::vector<double>& areas, const Eigen::Isometry3d& world_from_sensor,
+                double range, std::size_t count, std::mt19937& rng) {
+  std::discrete_distribution<std::size_t> pick(areas.begin(), areas.end());
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Eigen::Vector3d> kept;
+  while (kept.size() < count) {
+    const Eigen::Vector3d p = surfaces[pick(rng)](rng);
+    if ((p - world_from_sensor.translation()).norm() > range) continue;
+    kept.push_back(world_from_sensor.inverse() * (p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))));
+  }
+  PointCloud cloud;
+  cloud.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i) cloud.positions.col(static_cast<Eigen::Index>(i)) = kept[i].cast<float>();
+  return cloud;
+}
+
+// The models' ground, as modelling finds it: z = 0 in the world, z = -1 in each (level) sensor's frame.
+void set_ground(RegistrationResult& result) {
+  for (SceneModel* model : {&result.source_model, &result.target_model}) {
+    model->has_ground = true;
+    model->ground_normal = Eigen::Vector3d::UnitZ();
+    model->ground_offset = 1.0;
+  }
+}
+
+Eigen::Isometry3d pose(double x, double y, double yaw_degrees) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = Eigen::AngleAxisd(yaw_degrees * kPi / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  t.translation() = Eigen::Vector3d(x, y, 1.0);
+  return t;
+}
+
+// Rectangles (and other samplers) with their areas, so points fall evenly over the scene.
+struct Scene {
+  std::vector<Surface> surfaces;
+  std::vector<double> areas;
+  void add(const Eigen::Vector3d& corner, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    surfaces.push_back(rectangle(corner, a, b));
+    areas.push_back(a.cross(b).norm());
+  }
+};
+
+// Ground, a long wall at y = -5 with a 0.5 m pillar every 2.5 m (it repeats along x), and a curved
+// wall on the other side (radius 14 m, lowest at y = 6): only the curve tells shifts of 2.5 m apart.
+Scene colonnade_with_curved_wall() {
+  Scene scene;
+  const Eigen::Vector3d up(0, 0, 3);
+  scene.add({-30, -5, 0}, {60, 0, 0}, {0, 14, 0});
+  scene.add({-30, -5, 0}, {60, 0, 0}, up);
+  for (double x = -30; x < 30; x += 2.5) {
+    scene.add({x, -4.6, 0}, {0.5, 0, 0}, up);
+    scene.add({x, -5, 0}, {0, 0.4, 0}, up);
+    scene.add({x + 0.5, -5, 0}, {0, 0.4, 0}, up);
+  }
+  const double radius = 14.0;
+  scene.surfaces.push_back([radius](std::mt19937& rng) {
+    std::uniform_real_distribution<double> angle(230.0 * kPi / 180.0, 310.0 * kPi / 180.0), height(0.0, 3.0);
+    const double theta = angle(rng);
+    return Eigen::Vector3d(radius * std::cos(theta), 20.0 + radius * std::sin(theta), height(rng));
+  });
+  scene.areas.push_back(radius * 80.0 * kPi / 180.0 * 3.0);
+  return scene;
+}
+
+// A straight corridor 160 m long: floor, two walls 6 m apart, nothing else.
+Scene featureless_corridor() {
+  Scene scene;
+  scene.add({-80, -3, 0}, {160, 0, 0}, {0, 6, 0});
+  scene.add({-80, -3, 0}, {160, 0, 0}, {0, 0, 3});
+  scene.add({-80, 3, 0}, {160, 0, 0}, {0, 0, 3});
+  return scene;
+}
+
+TEST(DenseSearch, PointToPlaneIcpRecoversASmallOffset) {
+  std::mt19937 rng(3);
+  const Scene scene = colonnade_with_curved_wall();
+  const Eigen::Isometry3d target_sensor = pose(0, 0, 0);
+  const Eigen::Isometry3d source_sensor = pose(1.0, 0.5, 4.0);
+  const PointCloud target = scan(scene.surfaces, scene.areas, target_sensor, 20.0, 40000, rng);
+  const PointCloud source = scan(scene.surfaces, scene.areas, source_sensor, 20.0, 40000, rng);
+  const Eigen::Isometry3d truth = target_sensor.inverse() * source_sensor;  // source frame -> target frame
+  for (int trial = 0; trial < 5; ++trial) {
+    Eigen::Isometry3d start = truth;
+    start.pretranslate(Eigen::Vector3d(std::normal_distribution<double>(0.0, 0.2)(rng), std::normal_distribution<double>(0.0, 0.2)(rng), 0.05));
+    start.rotate(Eigen::AngleAxisd(2.0 * kPi / 180.0, Eigen::Vector3d(0.2, 0.1, 1.0).normalized()));
+    const DenseOptimum optimum = align_point_to_plane(source, target, start);
+    EXPECT_LT(translation_error(optimum.transform, truth), 0.03) << "trial " << trial;
+    EXPECT_LT(rotation_error_degrees(optimum.transform, truth), 0.2) << "trial " << trial;
+    EXPECT_LT(optimum.median_residual, 0.02) << "trial " << trial;
+    EXPECT_GT(optimum.overlap, 0.7) << "trial " << trial;
+  }
+}
+
+// An `ambiguous` answer two pillars off along the colonnade: verify_registration finds the truth.
+TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
+  std::mt19937 rng(7);
+  const Scene scene = colonnade_with_curved_wall();
+  for (int trial = 0; trial < 3; ++trial) {
+    const Eigen::Isometry3d target_sensor = pose(0, 0, 0);
+    const Eigen::Isometry3d source_sensor = pose(3.4 + 0.3 * trial, 0.2, 1.0 - trial);
+    const PointCloud target = scan(scene.surfaces, scene.areas, target_sensor, 18.0, 60000, rng);
+    const PointCloud source = scan(scene.surfaces, scene.areas, source_sensor, 18.0, 60000, rng);
+    const Eigen::Isometry3d truth = target_sensor.inverse() * source_sensor;
+    RegistrationResult result;
+    result.status = RegistrationStatus::Ambiguous;
+    result.transform = truth;
+    result.transform.pretranslate(Eigen::Vector3d(-5.0, 0.0, 0.0));  // two pillar spacings off
+    set_ground(result);
+    const Eigen::Isometry3d wrong = result.transform;
+    RegistrationOptions options;
+    verify_registration(result, source, target, options);
+    ASSERT_TRUE(result.dense_search.has_value());
+    const DenseSearchResult& search = *result.dense_search;
+    std::printf("trial %d: weakest (%.2f %.2f %.2f) share %.2f, best %s overlap %.3f, margin %.3f, RTE %.3f m, %s\n", trial,
+                search.weakest_direction.x(), search.weakest_direction.y(), search.weakest_direction.z(), search.weakest_share,
+                search.optima[search.best].start.c_str(), search.optima[search.best].overlap, search.margin,
+                translation_error(result.transform, truth), result.message.c_str());
+    EXPECT_GT(std::abs(search.weakest_direction.x()), 0.9) << "the colonnade constrains x least";
+    EXPECT_EQ(result.status, RegistrationStatus::Ok) << result.message;
+    EXPECT_LT(translation_error(result.transform, truth), 0.05);
+    EXPECT_LT(rotation_error_degrees(result.transform, truth), 0.3);
+    ASSERT_TRUE(search.rival.has_value()) << "the wrong answer's own optimum is a distinct rival";
+    EXPECT_GT(translation_error(search.optima[*search.rival].transform, truth), 2.0);
+    EXPECT_GE(search.margin, options.dense_search.decisive_margin);
+    EXPECT_GT(result.timings_ms.at("dense_search"), 0.0);
+    EXPECT_GT(translation_error(wrong, truth), 4.9);
+  }
+}
+
+// Nothing tells positions along a straight corridor apart: not settled, the quadric answer stands.
+TEST(DenseSearch, FeaturelessCorridorIsNotSettled) {
+  std::mt19937 rng(11);
+  const Scene scene = featureless_corridor();
+  const Eigen::Isometry3d target_sensor = pose(0, 0, 0);
+  const Eigen::Isometry3d source_sensor = pose(2.0, 0.3, 1.0);
+  // Both see the whole 160 m: a range limit would make the truth the shift that lines up the ends.
+  const PointCloud target = scan(scene.surfaces, scene.areas, target_sensor, 200.0, 60000, rng);
+  const PointCloud source = scan(scene.surfaces, scene.areas, source_sensor, 200.0, 60000, rng);
+  const Eigen::Isometry3d truth = target_sensor.inverse() * source_sensor;
+  RegistrationResult result;
+  result.status = RegistrationStatus::Ambiguous;
+  result.transform = truth;
+  result.transform.pretranslate(Eigen::Vector3d(5.0, 0.0, 0.0));
+  set_ground(result);
+  const Eigen::Isometry3d answer = result.transform;
+  RegistrationOptions options;
+  options.source_extraction.maximum_range = 0.0;  // no range limit
+  options.target_extraction.maximum_range = 0.0;
+  verify_registration(result, source, target, options);
+  ASSERT_TRUE(result.dense_search.has_value());
+  const DenseSearchResult& search = *result.dense_search;
+  std::printf("corridor: weakest (%.2f %.2f %.2f) share %.4f, margin %.4f: %s\n", search.weakest_direction.x(),
+              search.weakest_direction.y(), search.weakest_direction.z(), search.weakest_share, search.margin,
+              result.message.c_str());
+  EXPECT_GT(std::abs(search.weakest_direction.x()), 0.99);
+  EXPECT_LT(search.weakest_share, 0.01) << "no surface faces along the corridor";
+  EXPECT_LT(search.margin, options.dense_search.decisive_margin);
+  EXPECT_EQ(result.status, RegistrationStatus::Ambiguous) << result.message;
+  EXPECT_TRUE(result.transform.isApprox(answer)) << "an unsettled search leaves the quadric answer";
+}
+
+}  // namespace
+}  // namespace quadrix
