@@ -96,11 +96,11 @@ Linearisation linearise(const PreparedPair& pair, const Eigen::Isometry3d& trans
   result.residuals.reserve(static_cast<std::size_t>(pair.source.cols()));
   for (Eigen::Index i = 0; i < pair.source.cols(); ++i) {
     const Eigen::Vector3d p = transform * Eigen::Vector3d(pair.source.col(i));
-    const std::vector<Neighbor> nearest = pair.target_index.nearest(p, 1);
-    if (nearest.empty() || nearest.front().distance > maximum_distance) continue;
-    const Eigen::Vector3d n = pair.target_normals.col(static_cast<Eigen::Index>(nearest.front().index));
+    const std::optional<Neighbor> nearest = pair.target_index.nearest(p);
+    if (!nearest || nearest->distance > maximum_distance) continue;
+    const Eigen::Vector3d n = pair.target_normals.col(static_cast<Eigen::Index>(nearest->index));
     if (n.isZero()) continue;
-    const double residual = n.dot(p - pair.target_index.points().col(static_cast<Eigen::Index>(nearest.front().index)));
+    const double residual = n.dot(p - pair.target_index.points().col(static_cast<Eigen::Index>(nearest->index)));
     Eigen::Matrix<double, 6, 1> row;
     row << p.cross(n), n;  // d/dω of n·(exp(ω)p + τ) at 0, then d/dτ
     result.information += row * row.transpose();

@@ -94,6 +94,16 @@ std::optional<Neighbor> PointIndex::nearest_not_excluded(const Eigen::Vector3d& 
   return result.result();
 }
 
+std::optional<Neighbor> PointIndex::nearest(const Eigen::Vector3d& query) const {
+  if (size() == 0) return std::nullopt;
+  std::size_t index = 0;
+  double squared = 0.0;
+  nanoflann::KNNResultSet<double, std::size_t> result(1);
+  result.init(&index, &squared);
+  tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  return Neighbor{index, std::sqrt(squared)};
+}
+
 std::vector<Neighbor> PointIndex::nearest(const Eigen::Vector3d& query, std::size_t count) const {
   count = std::min(count, size());
   std::vector<Neighbor> found;

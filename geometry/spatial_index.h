@@ -39,6 +39,8 @@ class PointIndex {
   std::optional<Neighbor> nearest_not_excluded(const Eigen::Vector3d& query, const std::vector<bool>& excluded) const;
   /// The `count` nearest points to `query`, nearest first (fewer when the index holds fewer).
   std::vector<Neighbor> nearest(const Eigen::Vector3d& query, std::size_t count) const;
+  /// The nearest point to `query` (nullopt for an empty index); allocates nothing, for inner loops such as ICP.
+  std::optional<Neighbor> nearest(const Eigen::Vector3d& query) const;
 
  private:
   struct Tree;

@@ -71,8 +71,12 @@ TEST(PointIndex, KNearestMatchBruteForceDistances) {
       EXPECT_NEAR(actual[i].distance, expected[i].distance, 1e-12) << "trial " << trial << " rank " << i;
       EXPECT_NEAR((points.col(static_cast<Eigen::Index>(actual[i].index)) - query).norm(), actual[i].distance, 1e-12);
     }
+    const std::optional<Neighbor> single = index.nearest(query);
+    ASSERT_TRUE(single.has_value());
+    EXPECT_NEAR(single->distance, expected.front().distance, 1e-12);
   }
   EXPECT_TRUE(PointIndex(Eigen::Matrix3Xd(3, 0)).nearest(Eigen::Vector3d::Zero(), 3).empty());
+  EXPECT_FALSE(PointIndex(Eigen::Matrix3Xd(3, 0)).nearest(Eigen::Vector3d::Zero()).has_value());
 }
 
 TEST(PointIndex, EmptyIndexAndBadInput) {

@@ -1,0 +1,69 @@
+// The dense search that settles ambiguous answers (estimation/dense_search.h) on the real 3DTK pair
+// 2->0 (81k points a scan, the robot's self-hits within 2 m cropped as `auto` does): one
+// point-to-plane ICP from the identity, and the whole search along the weakest direction (17 shifts
+// plus the identity). Skips with a message when ../shared/data is absent.
+#include "estimation/dense_search.h"
+#include "geometry/io.h"
+
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <vector>
+
+namespace {
+
+std::string data_path(const std::string& relative) {
+  if (const char* root = std::getenv("QUADRIX_DATA_DIR")) return (std::filesystem::path(root) / relative).string();
+  return (std::filesystem::path(QUADRIX_DATA_DIR) / relative).string();
+}
+
+// A 3DTK scan without the points within 2 m of the scanner; empty when the shared data is absent.
+quadrix::PointCloud cropped_scan(const std::string& name) {
+  const std::string path = data_path("3dtk/" + name);
+  if (!std::filesystem::exists(path)) return {};
+  const quadrix::PointCloud cloud = quadrix::read_point_cloud(path);
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i)
+    if (cloud.positions.col(i).norm() >= 2.0f) kept.push_back(i);
+  quadrix::PointCloud cropped;
+  cropped.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i) cropped.positions.col(static_cast<Eigen::Index>(i)) = cloud.positions.col(kept[i]);
+  return cropped;
+}
+
+struct Pair {
+  quadrix::PointCloud source = cropped_scan("scan002_RH_m.xyz");
+  quadrix::PointCloud target = cropped_scan("scan000_RH_m.xyz");
+};
+
+const Pair& pair_2_to_0() {
+  static const Pair pair;
+  return pair;
+}
+
+bool require_pair(benchmark::State& state) {
+  if (!pair_2_to_0().source.empty() && !pair_2_to_0().target.empty()) return true;
+  state.SkipWithError(("real data absent: " + data_path("3dtk/scan002_RH_m.xyz")).c_str());
+  return false;
+}
+
+void BM_AlignPointToPlane3dtk(benchmark::State& state) {
+  if (!require_pair(state)) return;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(quadrix::align_point_to_plane(pair_2_to_0().source, pair_2_to_0().target, Eigen::Isometry3d::Identity()).overlap);
+}
+BENCHMARK(BM_AlignPointToPlane3dtk)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_SearchWeakestDirection3dtk(benchmark::State& state) {
+  if (!require_pair(state)) return;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(quadrix::search_weakest_direction(pair_2_to_0().source, pair_2_to_0().target, Eigen::Isometry3d::Identity(), {},
+                                                               Eigen::Vector3d::UnitZ(), std::nullopt, 2.0, 5.0)
+                                 .margin);
+}
+BENCHMARK(BM_SearchWeakestDirection3dtk)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
