@@ -102,19 +102,32 @@ Scene featureless_corridor() {
   return scene;
 }
 
+// Both sides' scans of `scene`: the target's sensor at (0, 0, 1), the source's at `source_sensor`;
+// `truth` maps source-frame points into the target frame.
+struct ScannedPair {
+  PointCloud source;
+  PointCloud target;
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+};
+
+ScannedPair scan_pair(const Scene& scene, const Eigen::Isometry3d& source_sensor, double range, std::size_t count, std::mt19937& rng) {
+  const Eigen::Isometry3d target_sensor = pose(0, 0, 0);
+  ScannedPair pair;
+  pair.target = scan(scene.surfaces, scene.areas, target_sensor, range, count, rng);
+  pair.source = scan(scene.surfaces, scene.areas, source_sensor, range, count, rng);
+  pair.truth = target_sensor.inverse() * source_sensor;
+  return pair;
+}
+
 TEST(DenseSearch, PointToPlaneIcpRecoversASmallOffset) {
   std::mt19937 rng(3);
-  const Scene scene = colonnade_with_curved_wall();
-  const Eigen::Isometry3d target_sensor = pose(0, 0, 0);
-  const Eigen::Isometry3d source_sensor = pose(1.0, 0.5, 4.0);
-  const PointCloud target = scan(scene.surfaces, scene.areas, target_sensor, 20.0, 40000, rng);
-  const PointCloud source = scan(scene.surfaces, scene.areas, source_sensor, 20.0, 40000, rng);
-  const Eigen::Isometry3d truth = target_sensor.inverse() * source_sensor;  // source frame -> target frame
+  const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(1.0, 0.5, 4.0), 20.0, 40000, rng);
+  const Eigen::Isometry3d& truth = pair.truth;
   for (int trial = 0; trial < 5; ++trial) {
     Eigen::Isometry3d start = truth;
     start.pretranslate(Eigen::Vector3d(std::normal_distribution<double>(0.0, 0.2)(rng), std::normal_distribution<double>(0.0, 0.2)(rng), 0.05));
     start.rotate(Eigen::AngleAxisd(2.0 * kPi / 180.0, Eigen::Vector3d(0.2, 0.1, 1.0).normalized()));
-    const DenseOptimum optimum = align_point_to_plane(source, target, start);
+    const DenseOptimum optimum = align_point_to_plane(pair.source, pair.target, start);
     EXPECT_LT(translation_error(optimum.transform, truth), 0.03) << "trial " << trial;
     EXPECT_LT(rotation_error_degrees(optimum.transform, truth), 0.2) << "trial " << trial;
     EXPECT_LT(optimum.median_residual, 0.02) << "trial " << trial;
@@ -127,11 +140,8 @@ TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
   std::mt19937 rng(7);
   const Scene scene = colonnade_with_curved_wall();
   for (int trial = 0; trial < 3; ++trial) {
-    const Eigen::Isometry3d target_sensor = pose(0, 0, 0);
-    const Eigen::Isometry3d source_sensor = pose(3.4 + 0.3 * trial, 0.2, 1.0 - trial);
-    const PointCloud target = scan(scene.surfaces, scene.areas, target_sensor, 18.0, 60000, rng);
-    const PointCloud source = scan(scene.surfaces, scene.areas, source_sensor, 18.0, 60000, rng);
-    const Eigen::Isometry3d truth = target_sensor.inverse() * source_sensor;
+    const ScannedPair pair = scan_pair(scene, pose(3.4 + 0.3 * trial, 0.2, 1.0 - trial), 18.0, 60000, rng);
+    const Eigen::Isometry3d& truth = pair.truth;
     RegistrationResult result;
     result.status = RegistrationStatus::Ambiguous;
     result.transform = truth;
@@ -139,7 +149,7 @@ TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
     set_ground(result);
     const Eigen::Isometry3d wrong = result.transform;
     RegistrationOptions options;
-    verify_registration(result, source, target, options);
+    verify_registration(result, pair.source, pair.target, options);
     ASSERT_TRUE(result.dense_search.has_value());
     const DenseSearchResult& search = *result.dense_search;
     std::printf("trial %d: weakest (%.2f %.2f %.2f) share %.2f, best %s overlap %.3f, margin %.3f, RTE %.3f m, %s\n", trial,
@@ -161,13 +171,9 @@ TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
 // Nothing tells positions along a straight corridor apart: not settled, the quadric answer stands.
 TEST(DenseSearch, FeaturelessCorridorIsNotSettled) {
   std::mt19937 rng(11);
-  const Scene scene = featureless_corridor();
-  const Eigen::Isometry3d target_sensor = pose(0, 0, 0);
-  const Eigen::Isometry3d source_sensor = pose(2.0, 0.3, 1.0);
   // Both see the whole 160 m: a range limit would make the truth the shift that lines up the ends.
-  const PointCloud target = scan(scene.surfaces, scene.areas, target_sensor, 200.0, 60000, rng);
-  const PointCloud source = scan(scene.surfaces, scene.areas, source_sensor, 200.0, 60000, rng);
-  const Eigen::Isometry3d truth = target_sensor.inverse() * source_sensor;
+  const ScannedPair pair = scan_pair(featureless_corridor(), pose(2.0, 0.3, 1.0), 200.0, 60000, rng);
+  const Eigen::Isometry3d& truth = pair.truth;
   RegistrationResult result;
   result.status = RegistrationStatus::Ambiguous;
   result.transform = truth;
@@ -177,7 +183,7 @@ TEST(DenseSearch, FeaturelessCorridorIsNotSettled) {
   RegistrationOptions options;
   options.source_extraction.maximum_range = 0.0;  // no range limit
   options.target_extraction.maximum_range = 0.0;
-  verify_registration(result, source, target, options);
+  verify_registration(result, pair.source, pair.target, options);
   ASSERT_TRUE(result.dense_search.has_value());
   const DenseSearchResult& search = *result.dense_search;
   std::printf("corridor: weakest (%.2f %.2f %.2f) share %.4f, margin %.4f: %s\n", search.weakest_direction.x(),
