@@ -172,10 +172,11 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
                    const AmbiguityOptions& options);
 
 /// Verification after selection (register_clouds and the benchmark): crops both clouds to their
-/// extraction's range limits around the sensor (the platform's own hits are not scene), settles an
-/// `ambiguous` answer with search_weakest_direction when `options.dense_search.enabled` (when the
-/// best optimum beats every distinct optimum's overlap by `decisive_margin` it becomes the answer,
-/// `ok`; otherwise the quadric answer stands, `ambiguous`), then check_overlap. Adds "dense_search" and "overlap" timings (also to "total").
+/// extraction's range limits around the sensor (the platform's own hits are not scene), runs
+/// check_overlap, then settles an `ambiguous` answer with search_weakest_direction when
+/// `options.dense_search.enabled`: when the best optimum beats every distinct optimum's overlap by
+/// `decisive_margin` it becomes the answer, `ok` (check_overlap runs again on it); otherwise the
+/// quadric answer stands, `ambiguous`. Adds "dense_search" and "overlap" timings (also to "total").
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                          const RegistrationOptions& options);
 

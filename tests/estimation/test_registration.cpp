@@ -212,6 +212,17 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   wrong.status = RegistrationStatus::Degenerate;
   check_overlap(wrong, source, target, AmbiguityOptions{});
   EXPECT_EQ(wrong.status, RegistrationStatus::Degenerate);
+  // verify_registration: the guard demotes the wrong `ok`, and the dense search then settles it.
+  RegistrationResult verified = right;
+  verified.status = RegistrationStatus::Ok;
+  verified.message = "candidate of level 0";
+  verified.transform = Eigen::Translation3d(8.0, 0.0, 0.0) * truth;
+  verify_registration(verified, source, target, RegistrationOptions{});
+  EXPECT_NE(verified.message.find("left where it is"), std::string::npos) << verified.message;
+  EXPECT_NE(verified.message.find("settled"), std::string::npos) << verified.message;
+  EXPECT_EQ(verified.status, RegistrationStatus::Ok) << verified.message;
+  EXPECT_LT(translation_error(verified.transform, truth), 0.1) << verified.message;
+  EXPECT_GE(verified.overlap->transformed, verified.overlap->identity);
 }
 
 TEST(RegisterClouds, OnlyOneSideBelowDeltaAAugmentsBothSides) {
