@@ -2,6 +2,7 @@
 #include "estimation/dense_search.h"
 
 #include "estimation/registration.h"
+#include "geometry/error.h"
 #include "geometry/spatial_index.h"
 
 #include <Eigen/Eigenvalues>
@@ -146,8 +147,24 @@ std::string shift_name(double shift) {
 
 }  // namespace
 
+void validate_dense_search_options(const DenseSearchOptions& options) {
+  const auto fail = [](const std::string& key, const std::string& expected, double value) {
+    std::ostringstream message;
+    message << "option 'dense_search." << key << "' must be " << expected << ", got " << value;
+    throw Error(message.str());
+  };
+  if (!(options.voxel_size > 0.0)) fail("voxel_size", "positive", options.voxel_size);
+  if (!(options.correspondence_distance > 0.0)) fail("correspondence_distance", "positive", options.correspondence_distance);
+  if (!(options.step > 0.0)) fail("step", "positive", options.step);
+  if (!(options.range >= 0.0)) fail("range", "non-negative", options.range);
+  if (!(options.decisive_margin >= 0.0)) fail("decisive_margin", "non-negative", options.decisive_margin);
+  if (options.normal_neighbours < 3) fail("normal_neighbours", "at least 3", static_cast<double>(options.normal_neighbours));
+  if (options.source_samples < 6) fail("source_samples", "at least 6", static_cast<double>(options.source_samples));
+}
+
 DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& start,
                                   const DenseSearchOptions& options) {
+  validate_dense_search_options(options);
   const PreparedPair pair = prepare(source, target, options);
   DenseOptimum optimum = run_icp(pair, start, options);
   optimum.start = "given";
@@ -161,6 +178,7 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
                                            const std::optional<Eigen::Vector4d>& source_ground,
                                            double translation_disagreement, double rotation_disagreement_degrees,
                                            const DenseSearchOptions& options) {
+  validate_dense_search_options(options);
   DenseSearchResult result;
   const PreparedPair pair = prepare(source, target, options);
   result.source_points = static_cast<std::size_t>(pair.source.cols());
@@ -189,7 +207,7 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
 
   std::vector<Eigen::Isometry3d> starts;
   std::vector<std::string> names;
-  const long reach = options.step > 0.0 ? static_cast<long>(std::floor(options.range / options.step + 1e-9)) : 0;
+  const long reach = static_cast<long>(std::floor(options.range / options.step + 1e-9));
   for (long k = -reach; k <= reach; ++k) {
     Eigen::Isometry3d start = answer;
     start.pretranslate(static_cast<double>(k) * options.step * result.weakest_direction);

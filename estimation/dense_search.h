@@ -33,6 +33,11 @@ struct DenseSearchOptions {
   double decisive_margin = 0.03;         ///< the winner's overlap must beat every distinct optimum's by this to be `ok` (3 standard errors of a difference of two 5,000-sample fractions)
 };
 
+/// Throws quadrix::Error naming the first option out of range (e.g. "option 'dense_search.voxel_size'
+/// must be positive, got 0"): voxel_size, correspondence_distance and step positive, range and
+/// decisive_margin not negative, normal_neighbours at least 3, source_samples at least 6.
+void validate_dense_search_options(const DenseSearchOptions& options);
+
 /// Where one ICP run started and where it ended.
 struct DenseOptimum {
   std::string start;                                            ///< "answer+2.0m" (shift along the weakest direction), "candidate 1", "identity"
@@ -57,6 +62,7 @@ struct DenseSearchResult {
 /// rotation, pairs by nearest target point within `options.correspondence_distance`). Both are
 /// thinned by `options.voxel_size`; target normals come from plane fits over the nearest
 /// `options.normal_neighbours` points. Returns the optimum and its median residual.
+/// Throws quadrix::Error for options out of range (validate_dense_search_options).
 DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& start,
                                   const DenseSearchOptions& options = {});
 
@@ -65,6 +71,7 @@ DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& ta
 /// ground), from each of `other_starts`, and from the identity; scores every optimum by
 /// measure_overlap (points near `source_ground` skipped) and names the best and its best distinct
 /// rival (farther than `translation_disagreement` m or `rotation_disagreement_degrees` apart).
+/// Throws quadrix::Error for options out of range (validate_dense_search_options).
 DenseSearchResult search_weakest_direction(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& answer,
                                            const std::vector<Eigen::Isometry3d>& other_starts,
                                            const std::optional<Eigen::Vector3d>& up,

@@ -247,6 +247,11 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
          }}});
   if (refiner_registry().count(o.estimation.refiner) == 0)
     throw file_error(path, "key 'estimation.refiner': unknown refiner '" + o.estimation.refiner + "'");
+  try {
+    validate_dense_search_options(o.dense_search);
+  } catch (const Error& error) {
+    throw file_error(path, error.what());
+  }
 }
 
 std::string registration_config_yaml(const RegistrationOptions& options, const std::string& side) {

@@ -4,12 +4,14 @@
 // answer stands, `ambiguous`). Scenes are sampled at random, each cloud on its own.
 #include "estimation/dense_search.h"
 #include "estimation/registration.h"
+#include "geometry/error.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace quadrix {
@@ -194,6 +196,29 @@ TEST(DenseSearch, FeaturelessCorridorIsNotSettled) {
   EXPECT_LT(search.margin, options.dense_search.decisive_margin);
   EXPECT_EQ(result.status, RegistrationStatus::Ambiguous) << result.message;
   EXPECT_TRUE(result.transform.isApprox(answer)) << "an unsettled search leaves the quadric answer";
+}
+
+TEST(DenseSearch, OptionsOutOfRangeAreNamed) {
+  EXPECT_NO_THROW(validate_dense_search_options(DenseSearchOptions{}));
+  const auto message = [](const DenseSearchOptions& options) {
+    try {
+      validate_dense_search_options(options);
+    } catch (const Error& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  };
+  DenseSearchOptions options;
+  options.step = 0.0;
+  EXPECT_NE(message(options).find("'dense_search.step'"), std::string::npos) << message(options);
+  options = DenseSearchOptions{};
+  options.normal_neighbours = 2;
+  EXPECT_NE(message(options).find("'dense_search.normal_neighbours' must be at least 3"), std::string::npos) << message(options);
+  options = DenseSearchOptions{};
+  options.voxel_size = -0.1;
+  PointCloud cloud;
+  cloud.positions = Eigen::Matrix3Xf::Random(3, 100);
+  EXPECT_THROW(align_point_to_plane(cloud, cloud, Eigen::Isometry3d::Identity(), options), Error);
 }
 
 }  // namespace

@@ -102,6 +102,7 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("bad_sensor.yaml", "sensor: hdl999\n", "'sensor'");
   expect_error_naming("bad_thresholds.yaml", "matching:\n  thresholds: [0.5, 0.2]\n", "'matching.thresholds'");
   expect_error_naming("bad_refiner.yaml", "estimation:\n  refiner: gauss\n", "'estimation.refiner'");
+  expect_error_naming("bad_voxel.yaml", "dense_search:\n  voxel_size: 0\n", "'dense_search.voxel_size'");
   RegistrationOptions ignored;
   EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
   EXPECT_THROW(registration_preset("hdl999"), Error);
