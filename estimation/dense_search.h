@@ -29,13 +29,17 @@ struct DenseSearchOptions {
   double correspondence_distance = 0.5;  ///< ICP drops pairs farther apart than this, m
   std::size_t iterations = 20;           ///< point-to-plane Gauss-Newton iterations per start (fewer when converged)
   double step = 1.0;                     ///< spacing of the starts along the weakest direction, m
-  double range = 8.0;                    ///< the starts reach this far either side of the answer, m
-  double decisive_margin = 0.03;         ///< the winner's overlap must beat every distinct optimum's by this to be `ok` (3 standard errors of a difference of two 5,000-sample fractions)
+  double range = 8.0;                    ///< the starts reach this far either side of the answer along it, m
+  double across_step = 2.5;              ///< spacing of the starts across the weakest direction (along the ground), m
+  double across_range = 5.0;             ///< the starts reach this far either side of the answer across it, m
+  double refine_band = 0.1;              ///< optima whose first-pass overlap is within this of the best are refined on all samples
+  std::size_t max_refined = 12;          ///< at most this many (the best first); more in the band leaves the search unsettled
+  double decisive_margin = 0.03;         ///< the winner's overlap must beat every distinct optimum's by this to be `ok` (about 2.5 standard errors of a difference of two fractions over the same 3,000 samples)
 };
 
 /// Throws quadrix::Error naming the first option out of range (e.g. "option 'dense_search.voxel_size'
-/// must be positive, got 0"): voxel_size, correspondence_distance and step positive, range and
-/// decisive_margin not negative, normal_neighbours at least 3, source_samples at least 6.
+/// must be positive, got 0"): voxel_size, correspondence_distance, step and across_step positive,
+/// range, across_range, refine_band and decisive_margin not negative, max_refined at least 1, normal_neighbours at least 3, source_samples at least 6.
 void validate_dense_search_options(const DenseSearchOptions& options);
 
 /// Where one ICP run started and where it ended.
@@ -44,6 +48,7 @@ struct DenseOptimum {
   Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< the local optimum ICP reached
   double overlap = 0.0;                                         ///< measure_overlap's fraction there (same sampling for every optimum)
   double median_residual = 0.0;                                 ///< median point-to-plane distance of its ICP pairs, m
+  bool refined = false;                                         ///< refined on all samples (else the first pass's third, too far below the best to matter)
 };
 
 /// What search_weakest_direction found.
@@ -54,6 +59,7 @@ struct DenseSearchResult {
   std::size_t best = 0;                                          ///< index of the highest overlap in `optima`
   std::optional<std::size_t> rival;                              ///< the highest-overlap optimum that disagrees with the best, if any
   double margin = 0.0;                                           ///< best overlap minus the rival's (the best overlap when there is no rival)
+  std::size_t unrefined_contenders = 0;                          ///< optima within refine_band of the best left unrefined (beyond max_refined): the search cannot settle
   std::size_t source_points = 0;                                 ///< thinned source points ICP aligned
   std::size_t target_points = 0;                                 ///< thinned target points with a normal
 };
@@ -68,7 +74,8 @@ DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& ta
 
 /// Runs ICP from `answer` shifted by k·step (|k·step| ≤ range) along the weakest translation
 /// direction of the target's normals at `answer` (orthogonal to `up` when given: motions along the
-/// ground), from each of `other_starts`, and from the identity; scores every optimum by
+/// ground) and by j·across_step (|j·across_step| ≤ across_range) across it, from each of
+/// `other_starts`, and from the identity; scores every optimum by
 /// measure_overlap (points near `source_ground` skipped) and names the best and its best distinct
 /// rival (farther than `translation_disagreement` m or `rotation_disagreement_degrees` apart).
 /// Throws quadrix::Error for options out of range (validate_dense_search_options).

@@ -376,15 +376,20 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
     } else {
       why << ", every start reached it";
     }
-    const bool settled = search.margin >= options.dense_search.decisive_margin;
+    const bool settled = search.margin >= options.dense_search.decisive_margin && search.unrefined_contenders == 0;
     if (settled) {
       result.transform = best.transform;
       result.status = RegistrationStatus::Ok;
       why << ": settled (margin " << search.margin << ")";
     } else {
       // Not settled: the points do not single out an optimum either, so the quadric answer stands.
-      why << ": not settled (margin " << search.margin << " < " << options.dense_search.decisive_margin
-          << "), the quadric answer stands";
+      why << ": not settled (margin " << search.margin;
+      if (search.unrefined_contenders > 0)
+        why << ", and " << search.unrefined_contenders << " optima within " << options.dense_search.refine_band
+            << " of the best left unrefined beyond max_refined " << options.dense_search.max_refined;
+      else
+        why << " < " << options.dense_search.decisive_margin;
+      why << "), the quadric answer stands";
     }
     result.message += why.str();
     result.dense_search = search;

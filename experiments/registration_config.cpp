@@ -243,6 +243,10 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
                  {"iterations", set(file, o.dense_search.iterations)},
                  {"step", set(file, o.dense_search.step)},
                  {"range", set(file, o.dense_search.range)},
+                 {"across_step", set(file, o.dense_search.across_step)},
+                 {"across_range", set(file, o.dense_search.across_range)},
+                 {"refine_band", set(file, o.dense_search.refine_band)},
+                 {"max_refined", set(file, o.dense_search.max_refined)},
                  {"decisive_margin", set(file, o.dense_search.decisive_margin)}});
          }}});
   if (refiner_registry().count(o.estimation.refiner) == 0)
@@ -367,6 +371,10 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
   key_value("iterations", options.dense_search.iterations);
   key_value("step", options.dense_search.step);
   key_value("range", options.dense_search.range);
+  key_value("across_step", options.dense_search.across_step);
+  key_value("across_range", options.dense_search.across_range);
+  key_value("refine_band", options.dense_search.refine_band);
+  key_value("max_refined", options.dense_search.max_refined);
   key_value("decisive_margin", options.dense_search.decisive_margin);
   out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

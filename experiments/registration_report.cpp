@@ -132,12 +132,14 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
       optima.push_back({{"start", optimum.start},
                         {"overlap", optimum.overlap},
                         {"median_residual_m", optimum.median_residual},
+                        {"refined", optimum.refined},
                         {"transform", matrix_json(optimum.transform)}});
     report["dense_search"] = {{"weakest_direction", {search.weakest_direction.x(), search.weakest_direction.y(), search.weakest_direction.z()}},
                               {"weakest_share", search.weakest_share},
                               {"best", search.best},
                               {"rival", search.rival ? nlohmann::json(*search.rival) : nlohmann::json(nullptr)},
                               {"margin", search.margin},
+                              {"unrefined_contenders", search.unrefined_contenders},
                               {"source_points", search.source_points},
                               {"target_points", search.target_points},
                               {"optima", optima}};

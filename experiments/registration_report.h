@@ -37,7 +37,7 @@ struct RegistrationReportContext {
 /// (paths and presets), with a ground truth "ground_truth" {transform, rte_m, rre_deg, success}, and
 /// with a measured overlap "overlap" {distance_m, transformed, identity, sampled_points}; when the
 /// dense search ran, "dense_search" {weakest_direction, weakest_share, best, rival, margin,
-/// source_points, target_points, optima: [{start, overlap, median_residual_m, transform}]}.
+/// source_points, target_points, optima: [{start, overlap, median_residual_m, refined, transform}]}.
 std::string registration_report_json(const RegistrationResult& result, const RegistrationReportContext& context);
 
 /// Writes registration_report_json atomically to `path`.

@@ -212,6 +212,8 @@ TEST(RegistrationConfig, PrintedConfigurationRoundTripsThroughApply) {
     options.dense_search.step = 0.75;
     options.dense_search.source_samples = 2500;
     options.dense_search.decisive_margin = 0.0625;
+    options.dense_search.across_step = 1.25;
+    options.dense_search.max_refined = 5;
     options.source_extraction.trunks.enabled = !options.source_extraction.trunks.enabled;
     options.source_extraction.planes.cluster_plane_area = 0.75;
     const std::string yaml = registration_config_yaml(options);
