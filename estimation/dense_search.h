@@ -34,12 +34,14 @@ struct DenseSearchOptions {
   double across_range = 5.0;             ///< the starts reach this far either side of the answer across it, m
   double refine_band = 0.1;              ///< optima whose first-pass overlap is within this of the best are refined on all samples
   std::size_t max_refined = 12;          ///< at most this many (the best first); more in the band leaves the search unsettled
+  double minimum_overlap = 0.4;          ///< and put at least this fraction of the source on the target (wrong settles measured 0.23-0.33, right ones 0.44-0.79)
   double decisive_margin = 0.03;         ///< the winner's overlap must beat every distinct optimum's by this to be `ok` (about 2.5 standard errors of a difference of two fractions over the same 3,000 samples)
 };
 
 /// Throws quadrix::Error naming the first option out of range (e.g. "option 'dense_search.voxel_size'
 /// must be positive, got 0"): voxel_size, correspondence_distance, step and across_step positive,
-/// range, across_range, refine_band and decisive_margin not negative, max_refined at least 1, normal_neighbours at least 3, source_samples at least 6.
+/// range, across_range, refine_band and decisive_margin not negative, minimum_overlap in [0, 1],
+/// max_refined at least 1, normal_neighbours at least 3, source_samples at least 6.
 void validate_dense_search_options(const DenseSearchOptions& options);
 
 /// Where one ICP run started and where it ended.

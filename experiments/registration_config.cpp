@@ -247,6 +247,7 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
                  {"across_range", set(file, o.dense_search.across_range)},
                  {"refine_band", set(file, o.dense_search.refine_band)},
                  {"max_refined", set(file, o.dense_search.max_refined)},
+                 {"minimum_overlap", set(file, o.dense_search.minimum_overlap)},
                  {"decisive_margin", set(file, o.dense_search.decisive_margin)}});
          }}});
   if (refiner_registry().count(o.estimation.refiner) == 0)
@@ -375,6 +376,7 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
   key_value("across_range", options.dense_search.across_range);
   key_value("refine_band", options.dense_search.refine_band);
   key_value("max_refined", options.dense_search.max_refined);
+  key_value("minimum_overlap", options.dense_search.minimum_overlap);
   key_value("decisive_margin", options.dense_search.decisive_margin);
   out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

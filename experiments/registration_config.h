@@ -41,7 +41,7 @@ std::string registration_presets_directory();
 ///   ambiguity: {score_ratio, translation_disagreement, rotation_disagreement_degrees, minimum_clique_for_ok, overlap_margin}
 ///   dense_search: {enabled, voxel_size, source_samples, normal_neighbours, correspondence_distance, iterations,
 ///                  step, range, across_step, across_range, refine_band, max_refined,
-///                  decisive_margin}
+///                  minimum_overlap, decisive_margin}
 /// Throws quadrix::Error naming the file and the key for unknown keys, wrong types or unreadable files.
 void apply_registration_config(const std::string& path, RegistrationOptions& options, const std::string& side = "both");
 

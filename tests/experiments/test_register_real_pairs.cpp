@@ -62,43 +62,48 @@ TEST(RegisterRealPairs, NonKittiPairsAreSolvedOrFlaggedNeverConfidentlyWrong) {
 }
 
 // The dense search on real outdoor scans: each KITTI loop closure handed to verify_registration as an
-// `ambiguous` answer 5 m off along a random horizontal direction (a quadric answer one facade
-// bay away) must come back `ok` at the ground truth, or stay `ambiguous`; never `ok` and wrong.
-TEST(RegisterRealPairs, DenseSearchSettlesKittiLoopClosuresFromAnAnswerFiveMetresOff) {
+// `ambiguous` answer 5, 10 or 15 m off along a random horizontal direction (a quadric answer one or
+// more facade bays away). It must come back `ok` at the ground truth, or stay `ambiguous`; never
+// `ok` and wrong. At 5 m, inside the grid of starts (8 m along the weakest direction, 5 m across),
+// every pair must settle.
+TEST(RegisterRealPairs, DenseSearchNeverSettlesKittiLoopClosuresWrongly) {
   QUADRIX_REQUIRE_SHARED_DATA("pairs.tsv");
   std::mt19937 rng(23);
-  int settled = 0, run = 0;
+  int run = 0;
   for (const BenchPair& pair : read_pairs_tsv(testing::shared_data_path("pairs.tsv"))) {
     if (!pair.ground_truth || pair.id.rfind("kitti00_lc", 0) != 0) continue;
     if (!std::filesystem::exists(pair.source) || !std::filesystem::exists(pair.target)) continue;
-    SCOPED_TRACE(pair.id);
     const PointCloud source = read_point_cloud(pair.source);
     const PointCloud target = read_point_cloud(pair.target);
     const Eigen::Isometry3d& truth = *pair.ground_truth;
-    const double heading = std::uniform_real_distribution<double>(0.0, 2.0 * 3.14159265358979)(rng);
-    RegistrationResult result;
-    result.status = RegistrationStatus::Ambiguous;
-    result.transform = Eigen::Translation3d(5.0 * std::cos(heading), 5.0 * std::sin(heading), 0.0) * truth;
-    for (SceneModel* model : {&result.source_model, &result.target_model}) {
-      model->has_ground = true;  // KITTI's ground: 1.73 m under the sensor
-      model->ground_normal = Eigen::Vector3d::UnitZ();
-      model->ground_offset = 1.73;
-    }
-    verify_registration(result, source, target, registration_preset("vlp64"));
-    ++run;
-    const DenseSearchResult& search = *result.dense_search;
-    std::printf("%-18s %-9s RTE %6.3f m RRE %5.3f deg margin %.3f best %s (%.3f) dense %.0f ms\n", pair.id.c_str(),
-                registration_status_name(result.status), translation_error(result.transform, truth),
-                rotation_error_degrees(result.transform, truth), search.margin, search.optima[search.best].start.c_str(),
-                search.optima[search.best].overlap, result.timings_ms.at("dense_search"));
-    if (result.status == RegistrationStatus::Ok) {
-      ++settled;
-      EXPECT_LT(translation_error(result.transform, truth), 0.3);
-      EXPECT_LT(rotation_error_degrees(result.transform, truth), 1.0);
+    for (const double offset : {5.0, 10.0, 15.0}) {
+      SCOPED_TRACE(pair.id + " offset " + std::to_string(offset));
+      const double heading = std::uniform_real_distribution<double>(0.0, 2.0 * 3.14159265358979)(rng);
+      RegistrationResult result;
+      result.status = RegistrationStatus::Ambiguous;
+      result.transform = Eigen::Translation3d(offset * std::cos(heading), offset * std::sin(heading), 0.0) * truth;
+      for (SceneModel* model : {&result.source_model, &result.target_model}) {
+        model->has_ground = true;  // KITTI's ground: 1.73 m under the sensor
+        model->ground_normal = Eigen::Vector3d::UnitZ();
+        model->ground_offset = 1.73;
+      }
+      verify_registration(result, source, target, registration_preset("vlp64"));
+      ++run;
+      const DenseSearchResult& search = *result.dense_search;
+      std::printf("%-18s %4.0f m off: %-9s RTE %6.3f m RRE %5.3f deg margin %.3f best %s (%.3f) dense %.0f ms\n", pair.id.c_str(),
+                  offset, registration_status_name(result.status), translation_error(result.transform, truth),
+                  rotation_error_degrees(result.transform, truth), search.margin, search.optima[search.best].start.c_str(),
+                  search.optima[search.best].overlap, result.timings_ms.at("dense_search"));
+      if (result.status == RegistrationStatus::Ok) {
+        EXPECT_LT(translation_error(result.transform, truth), 0.3);
+        EXPECT_LT(rotation_error_degrees(result.transform, truth), 1.0);
+      } else {
+        EXPECT_EQ(result.status, RegistrationStatus::Ambiguous);
+        EXPECT_GT(offset, 5.0) << "inside the grid every loop closure settles";
+      }
     }
   }
   if (run == 0) GTEST_SKIP() << "no KITTI loop closure in pairs.tsv";
-  EXPECT_EQ(settled, run) << "every loop closure has structure enough to settle";
 }
 
 }  // namespace
