@@ -1,10 +1,11 @@
 // Dense search that settles an ambiguous answer (beyond the paper, which stops at selection; its
 // failure cases are scenes whose structure barely fixes one translation, such as a long wall that
 // repeats along the motion). The quadrics then support several answers a few metres apart, or
-// only one wrong one. The points still tell them apart: point-to-plane ICP is started from the
-// answer shifted along the direction the target's surfaces constrain least, from the other quadric
-// candidates and from not moving, and the local optimum that puts the most source points on the
-// target wins. It is `ok` only when it beats every distinct optimum by a clear margin.
+// only one wrong one. The points still tell them apart: point-to-plane ICP is started from a grid
+// around the answer (fine along the direction the target's surfaces constrain least, coarse across
+// it), from the other quadric candidates and from not moving, and the local optimum that puts the
+// most source points on the target wins. verify_registration calls it `ok` only when it beats
+// every distinct optimum by a clear margin and lands enough of the source on the target.
 #pragma once
 
 #include "estimation/overlap.h"
