@@ -212,17 +212,27 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   wrong.status = RegistrationStatus::Degenerate;
   check_overlap(wrong, source, target, AmbiguityOptions{});
   EXPECT_EQ(wrong.status, RegistrationStatus::Degenerate);
-  // verify_registration: the guard demotes the wrong `ok`, and the dense search then settles it.
+  // verify_registration: the guard demotes a wrong `ok` 6 m off, and the dense search then settles
+  // it (the truth lies inside its grid: 7 m along the weakest direction, 5 m across).
   RegistrationResult verified = right;
   verified.status = RegistrationStatus::Ok;
   verified.message = "candidate of level 0";
-  verified.transform = Eigen::Translation3d(8.0, 0.0, 0.0) * truth;
+  verified.transform = Eigen::Translation3d(6.0, 0.0, 0.0) * truth;
   verify_registration(verified, source, target, RegistrationOptions{});
   EXPECT_NE(verified.message.find("left where it is"), std::string::npos) << verified.message;
-  EXPECT_NE(verified.message.find("settled"), std::string::npos) << verified.message;
+  EXPECT_NE(verified.message.find(": settled"), std::string::npos) << verified.message;
   EXPECT_EQ(verified.status, RegistrationStatus::Ok) << verified.message;
   EXPECT_LT(translation_error(verified.transform, truth), 0.1) << verified.message;
   EXPECT_GE(verified.overlap->transformed, verified.overlap->identity);
+  // 8 m off, the best optimum (the truth) lies outside the grid: not settled, the answer stands.
+  RegistrationResult beyond = verified;
+  beyond.status = RegistrationStatus::Ok;
+  beyond.message = "candidate of level 0";
+  beyond.transform = Eigen::Translation3d(8.0, 0.0, 0.0) * truth;
+  verify_registration(beyond, source, target, RegistrationOptions{});
+  EXPECT_EQ(beyond.status, RegistrationStatus::Ambiguous) << beyond.message;
+  EXPECT_NE(beyond.message.find("outside the grid"), std::string::npos) << beyond.message;
+  EXPECT_TRUE(beyond.transform.isApprox(Eigen::Translation3d(8.0, 0.0, 0.0) * truth));
 }
 
 TEST(RegisterClouds, OnlyOneSideBelowDeltaAAugmentsBothSides) {
