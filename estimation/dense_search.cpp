@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <iomanip>
 #include <sstream>
+#include <optional>
 #include <unordered_set>
 
 namespace quadrix {
@@ -28,33 +29,39 @@ Eigen::Matrix3Xd thin(const PointCloud& cloud, double voxel) {
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d p = cloud.point(i);
     if (!p.allFinite()) continue;
-    const Eigen::Vector3i c = (p / voxel).array().floor().cast<int>();
-    const std::uint64_t key = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x()) & 0x1FFFFFu) << 42) |
-                              (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y()) & 0x1FFFFFu) << 21) |
-                              static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z()) & 0x1FFFFFu);
-    if (occupied.insert(key).second) kept.push_back(p);
+    if (occupied.insert(cell_key((p / voxel).array().floor().cast<int>())).second) kept.push_back(p);
   }
   Eigen::Matrix3Xd points(3, static_cast<Eigen::Index>(kept.size()));
   for (std::size_t i = 0; i < kept.size(); ++i) points.col(static_cast<Eigen::Index>(i)) = kept[i];
   return points;
 }
 
-PointCloud as_cloud(const Eigen::Matrix3Xd& points) {
-  PointCloud cloud;
-  cloud.positions = points.cast<float>();
-  return cloud;
-}
+// Optima are scored at measure_overlap's distance, the one check_overlap judges answers by, m.
+constexpr double kOverlapDistance = 0.3;
 
-// Both clouds thinned, the source sampled, the target indexed with a normal per point.
+// Both clouds thinned, the source sampled, the target indexed with a normal per point and hashed
+// once for scoring every optimum.
 struct PreparedPair {
   Eigen::Matrix3Xd source;   // thinned and sampled source points
-  PointCloud source_cloud;   // the same, for measure_overlap
   Eigen::Matrix3Xd coarse;   // every third of them, for the first pass of the search
-  PointCloud coarse_cloud;   // the same, for measure_overlap
-  PointCloud target_cloud;   // thinned target, for measure_overlap
   PointIndex target_index{Eigen::Matrix3Xd(3, 0)};
   Eigen::Matrix3Xd target_normals;
+  std::optional<TargetCoverage> coverage;  // the thinned target at kOverlapDistance
 };
+
+// measure_overlap's fraction over the pair's own samples: those of `points` above `ground` (more
+// than 0.5 m off it, when given) that the target covers after `transform`.
+double covered_fraction(const PreparedPair& pair, const Eigen::Matrix3Xd& points, const Eigen::Isometry3d& transform,
+                        const std::optional<Eigen::Vector4d>& ground) {
+  std::size_t tested = 0, covered = 0;
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    const Eigen::Vector3d p = points.col(i);
+    if (ground && std::abs(ground->head<3>().dot(p) + (*ground)(3)) < 0.5) continue;
+    ++tested;
+    covered += pair.coverage->covers(transform * p) ? 1 : 0;
+  }
+  return tested > 0 ? static_cast<double>(covered) / static_cast<double>(tested) : 0.0;
+}
 
 PreparedPair prepare(const PointCloud& source, const PointCloud& target, const DenseSearchOptions& options) {
   PreparedPair pair;
@@ -62,12 +69,12 @@ PreparedPair prepare(const PointCloud& source, const PointCloud& target, const D
   const Eigen::Index samples = std::min<Eigen::Index>(thinned_source.cols(), static_cast<Eigen::Index>(std::max<std::size_t>(options.source_samples, 1)));
   pair.source.resize(3, samples);
   for (Eigen::Index i = 0; i < samples; ++i) pair.source.col(i) = thinned_source.col(i * thinned_source.cols() / std::max<Eigen::Index>(samples, 1));
-  pair.source_cloud = as_cloud(pair.source);
   pair.coarse.resize(3, (samples + 2) / 3);
   for (Eigen::Index i = 0; i < pair.coarse.cols(); ++i) pair.coarse.col(i) = pair.source.col(3 * i);
-  pair.coarse_cloud = as_cloud(pair.coarse);
   Eigen::Matrix3Xd thinned_target = thin(target, options.voxel_size);
-  pair.target_cloud = as_cloud(thinned_target);
+  PointCloud target_cloud;
+  target_cloud.positions = thinned_target.cast<float>();
+  pair.coverage.emplace(target_cloud, kOverlapDistance);
   pair.target_index = PointIndex(thinned_target);
   const Eigen::Index count = pair.target_index.points().cols();
   pair.target_normals.resize(3, count);
@@ -183,7 +190,7 @@ DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& ta
   const PreparedPair pair = prepare(source, target, options);
   DenseOptimum optimum = run_icp(pair, pair.source, start, options.iterations, options);
   optimum.start = "given";
-  optimum.overlap = measure_overlap(pair.source_cloud, pair.target_cloud, optimum.transform).transformed;
+  optimum.overlap = covered_fraction(pair, pair.source, optimum.transform, std::nullopt);
   return optimum;
 }
 
@@ -252,7 +259,7 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
   tbb::parallel_for(std::size_t(0), starts.size(), [&](std::size_t i) {
     result.optima[i] = run_icp(pair, pair.coarse, starts[i], (options.iterations + 1) / 2, options);
     result.optima[i].start = names[i];
-    result.optima[i].overlap = measure_overlap(pair.coarse_cloud, pair.target_cloud, result.optima[i].transform, source_ground).transformed;
+    result.optima[i].overlap = covered_fraction(pair, pair.coarse, result.optima[i].transform, source_ground);
   });
   double best_coarse = 0.0;
   for (const DenseOptimum& optimum : result.optima) best_coarse = std::max(best_coarse, optimum.overlap);
@@ -273,7 +280,7 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
     optimum = run_icp(pair, pair.source, optimum.transform, options.iterations, options);
     optimum.start = start;
     optimum.refined = true;
-    optimum.overlap = measure_overlap(pair.source_cloud, pair.target_cloud, optimum.transform, source_ground).transformed;
+    optimum.overlap = covered_fraction(pair, pair.source, optimum.transform, source_ground);
   });
   for (std::size_t i = 1; i < result.optima.size(); ++i)
     if (result.optima[i].overlap > result.optima[result.best].overlap) result.best = i;

@@ -8,9 +8,36 @@
 #include <Eigen/Geometry>
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
+#include <unordered_map>
+#include <utility>
+#include <vector>
 
 namespace quadrix {
+
+/// The target's points hashed by cells of `distance`, built once and asked many times whether a
+/// point has a target point within `distance` (measure_overlap, and the dense search for every
+/// optimum it scores).
+class TargetCoverage {
+ public:
+  /// Hashes the finite points of `target`; `distance` must be positive (else quadrix::Error).
+  TargetCoverage(const PointCloud& target, double distance);
+  /// Whether some target point lies within distance() of `point`.
+  bool covers(const Eigen::Vector3d& point) const;
+  /// The distance it was built for, m.
+  double distance() const { return distance_; }
+
+ private:
+  Eigen::Vector3i cell_of(const Eigen::Vector3d& point) const;
+  double distance_;
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3f>> keyed_;                  // target points sorted by cell key
+  std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> cells_;  // key -> [begin, end) in keyed_
+};
+
+/// A 64-bit key of an integer cell (21 bits per axis): the voxel hashes of the overlap and the
+/// dense search's thinning share it.
+std::uint64_t cell_key(const Eigen::Vector3i& cell);
 
 /// How much of the source lands on the target, for pairs without ground truth: the fraction of
 /// source points standing above the source's ground (when the model has one) that have a target
