@@ -323,16 +323,12 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 
 namespace {
 
-// The points of `cloud` within the extraction's range limits around its sensor (as extract_elements crops).
+// The points of `cloud` within the extraction's range limits around its sensor (within_range, as extraction crops).
 PointCloud crop_to_range(const PointCloud& cloud, const ExtractionOptions& extraction) {
-  const double minimum_squared = extraction.minimum_range * extraction.minimum_range;
-  const double maximum_squared = extraction.maximum_range > 0.0 ? extraction.maximum_range * extraction.maximum_range : 1e300;
   std::vector<Eigen::Index> kept;
   kept.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const double squared = (cloud.point(i) - extraction.sensor_origin).squaredNorm();
-    if (squared >= minimum_squared && squared <= maximum_squared) kept.push_back(static_cast<Eigen::Index>(i));
-  }
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (within_range(cloud.point(i), extraction)) kept.push_back(static_cast<Eigen::Index>(i));
   PointCloud cropped;
   cropped.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
   for (std::size_t i = 0; i < kept.size(); ++i) cropped.positions.col(static_cast<Eigen::Index>(i)) = cloud.positions.col(kept[i]);

@@ -197,6 +197,12 @@ void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::ui
 
 }  // namespace
 
+bool within_range(const Eigen::Vector3d& point, const ExtractionOptions& options) {
+  const double squared = (point - options.sensor_origin).squaredNorm();
+  return squared >= options.minimum_range * options.minimum_range &&
+         (options.maximum_range <= 0.0 || squared <= options.maximum_range * options.maximum_range);
+}
+
 ExtractionResult extract_elements(const PointCloud& cloud, const ExtractionOptions& options,
                                   const std::vector<std::uint32_t>& labels) {
   return detail::extract_elements_of_points(cloud.positions.cast<double>(), cloud, options, labels);
@@ -218,12 +224,8 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
   // Range limits around the sensor (REFERENCE.md: HDL-64E 2-80 m).
   std::vector<std::uint32_t> in_range;
   in_range.reserve(cloud.size());
-  const double minimum_squared = options.minimum_range * options.minimum_range;
-  const double maximum_squared = options.maximum_range > 0.0 ? options.maximum_range * options.maximum_range : 1e300;
-  for (std::uint32_t i = 0; i < cloud.size(); ++i) {
-    const double squared = (points.col(i) - options.sensor_origin).squaredNorm();
-    if (squared >= minimum_squared && squared <= maximum_squared) in_range.push_back(i);
-  }
+  for (std::uint32_t i = 0; i < cloud.size(); ++i)
+    if (within_range(points.col(i), options)) in_range.push_back(i);
   result.points_in_range = in_range.size();
   result.timings_ms["crop"] = detail::elapsed_ms(start);
   if (in_range.empty()) {

@@ -291,6 +291,11 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
 /// Returns false for the rest (unlabelled, outlier, person, bicyclist, other-object ...), which are ignored.
 bool element_class_for_semantic_kitti_label(std::uint32_t label, ElementClass& element_class);
 
+/// Whether `point` lies within the range limits around the sensor (minimum_range, maximum_range
+/// from sensor_origin; maximum 0 is unlimited): the crop extraction starts with, and the one
+/// registration's verification applies to the clouds it measures.
+bool within_range(const Eigen::Vector3d& point, const ExtractionOptions& options);
+
 /// Whole extraction of a cloud (paper §"Quadric Extraction"). In Labels mode `labels` holds one
 /// SemanticKITTI label per point (else Error naming the counts); in Cluster mode it is ignored.
 /// Degenerate input gives a status, never an exception.
