@@ -1,0 +1,633 @@
+// Benchmark outputs: summaries from rows, pairs.csv, run.json, summary.md, SVG plots, shard merge
+// (see benchmark_runner.h). Every number of a summary comes from the rows, so a merged run and a
+// single run summarise identically.
+#include "experiments/benchmark/benchmark_runner.h"
+
+#include "geometry/error.h"
+#include "geometry/io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <set>
+#include <sstream>
+
+namespace quadrix {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Quantile by linear interpolation between order statistics (q in [0, 1]); 0 for no values.
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double position = q * static_cast<double>(values.size() - 1);
+  const std::size_t below = static_cast<std::size_t>(std::floor(position));
+  const std::size_t above = std::min(below + 1, values.size() - 1);
+  return values[below] + (position - static_cast<double>(below)) * (values[above] - values[below]);
+}
+
+double mean(const std::vector<double>& values) {
+  if (values.empty()) return 0.0;
+  double sum = 0.0;
+  for (const double value : values) sum += value;
+  return sum / static_cast<double>(values.size());
+}
+
+std::string format(const char* pattern, double value) {
+  char text[64];
+  std::snprintf(text, sizeof(text), pattern, value);
+  return text;
+}
+
+std::string exact(double value) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.17g", value);
+  return text;
+}
+
+// CSV field: quoted when it holds a comma, a quote or a line break.
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (const char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' || c == '\r' ? ' ' : c);
+  return quoted + "\"";
+}
+
+
+const std::vector<std::string>& csv_columns() {
+  static const std::vector<std::string> columns{
+      "task",          "pair_id",      "trial",          "method",  "difficulty",         "kind",
+      "has_gt",        "status",       "success",        "rte_m",   "rre_deg",            "yaw_deg",
+      "shift_x_m",     "shift_y_m",    "seed",           "correspondences", "inliers",   "recalled",
+      "source_model_bytes", "target_model_bytes", "timings_ms", "message"};
+  return columns;
+}
+
+std::string timings_text(const std::map<std::string, double>& timings) {
+  std::string text;
+  for (const auto& entry : timings) text += (text.empty() ? "" : ";") + entry.first + "=" + exact(entry.second);
+  return text;
+}
+
+// Tableau-like palette of the plots, one colour per method.
+const char* colour(std::size_t index) {
+  static const char* colours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
+                                  "#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#393b79", "#ad494a"};
+  return colours[index % 12];
+}
+
+std::string escape_xml(const std::string& text) {
+  std::string escaped;
+  for (const char c : text) {
+    if (c == '<') escaped += "&lt;";
+    else if (c == '>') escaped += "&gt;";
+    else if (c == '&') escaped += "&amp;";
+    else escaped += c;
+  }
+  return escaped;
+}
+
+// Closes an SVG document after a legend of one coloured square per method at (x, top).
+std::string with_method_legend(const std::string& body, const std::vector<MethodSummary>& summaries, int x, int top) {
+  std::ostringstream svg;
+  svg << body;
+  for (std::size_t m = 0; m < summaries.size(); ++m)
+    svg << "<rect x=\"" << x << "\" y=\"" << top + 18 * static_cast<int>(m) << "\" width=\"12\" height=\"12\" fill=\""
+        << colour(m) << "\"/><text x=\"" << x + 18 << "\" y=\"" << top + 10 + 18 * static_cast<int>(m) << "\">"
+        << escape_xml(summaries[m].method) << "</text>\n";
+  svg << "</svg>\n";
+  return svg.str();
+}
+
+// Stage order of the time plot and table: pipeline order, then anything else alphabetically, total last.
+std::vector<std::string> ordered_stages(const std::map<std::string, std::pair<double, double>>& stages) {
+  static const std::vector<std::string> pipeline{"modelling_source", "modelling_target", "correspondences", "graphs",
+                                                 "cliques",          "estimation",       "selection",       "downsample",
+                                                 "features",         "matching"};
+  std::vector<std::string> order;
+  for (const std::string& stage : pipeline)
+    if (stages.count(stage)) order.push_back(stage);
+  for (const auto& entry : stages)
+    if (entry.first != "total" && std::find(order.begin(), order.end(), entry.first) == order.end()) order.push_back(entry.first);
+  return order;
+}
+
+// Difficulties in order of first appearance over every summary.
+std::vector<std::string> difficulty_order(const std::vector<BenchRow>* rows, const std::vector<MethodSummary>& summaries) {
+  std::vector<std::string> order;
+  if (rows)
+    for (const BenchRow& row : *rows)
+      if (std::find(order.begin(), order.end(), row.difficulty) == order.end()) order.push_back(row.difficulty);
+  for (const MethodSummary& summary : summaries)
+    for (const auto& entry : summary.by_difficulty)
+      if (std::find(order.begin(), order.end(), entry.first) == order.end()) order.push_back(entry.first);
+  return order;
+}
+
+}  // namespace
+
+std::vector<std::string> parse_csv_fields(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string field;
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields.push_back(field);
+      field.clear();
+    } else if (c != '\r') {
+      field += c;
+    }
+  }
+  fields.push_back(field);
+  return fields;
+}
+
+std::vector<MethodSummary> summarize_bench(const std::vector<BenchRow>& rows, const std::vector<std::string>& methods) {
+  std::vector<MethodSummary> summaries;
+  for (const std::string& method : methods) {
+    MethodSummary summary;
+    summary.method = method;
+    std::vector<double> rte;
+    std::vector<double> rre;
+    std::vector<double> inlier_ratios;
+    std::vector<double> correspondences;
+    std::vector<double> bytes;
+    std::size_t recalled = 0;
+    std::size_t recall_rows = 0;
+    std::map<std::string, std::vector<double>> stages;
+    for (const BenchRow& row : rows) {
+      if (row.method != method) continue;
+      ++summary.tasks;
+      ++summary.statuses[row.status];
+      for (const auto& entry : row.timings_ms) stages[entry.first].push_back(entry.second);
+      if (row.correspondences >= 0) correspondences.push_back(static_cast<double>(row.correspondences));
+      if (row.source_model_bytes >= 0) bytes.push_back(static_cast<double>(row.source_model_bytes));
+      if (row.target_model_bytes >= 0) bytes.push_back(static_cast<double>(row.target_model_bytes));
+      if (!row.has_ground_truth) {
+        ++summary.without_ground_truth;
+        continue;
+      }
+      ++summary.with_ground_truth;
+      auto& bin = summary.by_difficulty[row.difficulty];
+      ++bin.second;
+      summary.rte_values.push_back(row.rte);
+      summary.rre_values.push_back(row.rre);
+      if (row.success) {
+        ++summary.successes;
+        ++bin.first;
+        rte.push_back(row.rte);
+        rre.push_back(row.rre);
+      }
+      if (row.recalled >= 0) {
+        ++recall_rows;
+        recalled += static_cast<std::size_t>(row.recalled);
+        if (row.correspondences > 0 && row.inliers >= 0)
+          inlier_ratios.push_back(static_cast<double>(row.inliers) / static_cast<double>(row.correspondences));
+        else if (row.correspondences == 0)
+          inlier_ratios.push_back(0.0);
+      }
+    }
+    if (summary.tasks == 0) continue;
+    summary.median_rte = quantile(rte, 0.5);
+    summary.median_rre = quantile(rre, 0.5);
+    summary.mean_rte = mean(rte);
+    summary.mean_rre = mean(rre);
+    if (recall_rows > 0) {
+      summary.correspondence_recall = static_cast<double>(recalled) / static_cast<double>(recall_rows);
+      summary.mean_inlier_ratio = mean(inlier_ratios);
+    }
+    if (!correspondences.empty()) summary.mean_correspondences = mean(correspondences);
+    if (!bytes.empty()) summary.median_model_bytes = quantile(bytes, 0.5);
+    for (const auto& entry : stages) summary.stage_ms[entry.first] = {quantile(entry.second, 0.5), quantile(entry.second, 0.9)};
+    if (summary.stage_ms.count("total")) {
+      summary.median_total_ms = summary.stage_ms["total"].first;
+      summary.p90_total_ms = summary.stage_ms["total"].second;
+    }
+    summaries.push_back(std::move(summary));
+  }
+  const auto quadrix = std::find_if(summaries.begin(), summaries.end(), [](const MethodSummary& s) { return s.method == "quadrix"; });
+  if (quadrix != summaries.end() && quadrix->median_total_ms > 0.0)
+    for (MethodSummary& summary : summaries) summary.time_ratio_to_quadrix = summary.median_total_ms / quadrix->median_total_ms;
+  return summaries;
+}
+
+std::string bench_summary_text(const std::vector<MethodSummary>& summaries) {
+  std::ostringstream text;
+  for (const MethodSummary& s : summaries) {
+    text << std::left << std::setw(18) << s.method << " success ";
+    if (s.with_ground_truth)
+      text << s.successes << "/" << s.with_ground_truth << " (" << format("%.1f", 100.0 * s.success_rate()) << "%)";
+    else
+      text << "-";
+    text << "  median " << format("%.0f", s.median_total_ms) << " ms (p90 " << format("%.0f", s.p90_total_ms) << ")";
+    if (s.time_ratio_to_quadrix > 0.0) text << "  x" << format("%.2f", s.time_ratio_to_quadrix) << " Quadrix's time";
+    if (s.without_ground_truth) text << "  no ground truth: " << s.without_ground_truth;
+    text << "\n";
+  }
+  return text.str();
+}
+
+std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, const std::string& title) {
+  std::ostringstream md;
+  md << "# " << title << "\n\n";
+  md << "Success: RTE <= 2 m and RRE <= 5 deg, over rows with ground truth; rows without one are counted apart "
+        "(\"no GT\"). RTE/RRE are medians over successes. IR = mean inlier ratio of the putative correspondences "
+        "(0.5 m), CR = correspondence recall (>= 3 inliers). Times run from both clouds in memory to the transform "
+        "(Quadrix: both modelling times included even when a model was reused).\n\n";
+  md << "| method | success | no GT | RTE m | RRE deg | IR % | CR % | median ms | p90 ms | time / Quadrix | median model bytes/frame |\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const MethodSummary& s : summaries) {
+    md << "| " << s.method << " | ";
+    if (s.with_ground_truth)
+      md << s.successes << "/" << s.with_ground_truth << " (" << format("%.1f", 100.0 * s.success_rate()) << "%)";
+    else
+      md << "-";
+    md << " | " << s.without_ground_truth << " | " << (s.successes ? format("%.3f", s.median_rte) : "-") << " | "
+       << (s.successes ? format("%.3f", s.median_rre) : "-") << " | "
+       << (s.mean_inlier_ratio >= 0.0 ? format("%.2f", 100.0 * s.mean_inlier_ratio) : "-") << " | "
+       << (s.correspondence_recall >= 0.0 ? format("%.1f", 100.0 * s.correspondence_recall) : "-") << " | "
+       << format("%.1f", s.median_total_ms) << " | " << format("%.1f", s.p90_total_ms) << " | "
+       << (s.time_ratio_to_quadrix > 0.0 ? format("%.2f", s.time_ratio_to_quadrix) : "-") << " | "
+       << (s.median_model_bytes >= 0.0 ? format("%.0f", s.median_model_bytes) : "-") << " |\n";
+  }
+  const std::vector<std::string> difficulties = difficulty_order(nullptr, summaries);
+  if (!difficulties.empty()) {
+    md << "\n## Success per difficulty\n\n| method |";
+    for (const std::string& difficulty : difficulties) md << " " << difficulty << " |";
+    md << "\n|---|";
+    for (std::size_t k = 0; k < difficulties.size(); ++k) md << "---|";
+    md << "\n";
+    for (const MethodSummary& s : summaries) {
+      md << "| " << s.method << " |";
+      for (const std::string& difficulty : difficulties) {
+        const auto found = s.by_difficulty.find(difficulty);
+        if (found == s.by_difficulty.end() || found->second.second == 0)
+          md << " - |";
+        else
+          md << " " << found->second.first << "/" << found->second.second << " ("
+             << format("%.1f", 100.0 * double(found->second.first) / double(found->second.second)) << "%) |";
+      }
+      md << "\n";
+    }
+  }
+  md << "\n## Time per stage (median / p90, ms)\n\n| method | stage | median | p90 |\n|---|---|---|---|\n";
+  for (const MethodSummary& s : summaries) {
+    std::vector<std::string> stages = ordered_stages(s.stage_ms);
+    if (s.stage_ms.count("total")) stages.push_back("total");
+    for (const std::string& stage : stages)
+      md << "| " << s.method << " | " << stage << " | " << format("%.2f", s.stage_ms.at(stage).first) << " | "
+         << format("%.2f", s.stage_ms.at(stage).second) << " |\n";
+  }
+  md << "\n## Statuses\n\n| method | statuses |\n|---|---|\n";
+  for (const MethodSummary& s : summaries) {
+    md << "| " << s.method << " |";
+    for (const auto& entry : s.statuses) md << " " << entry.first << " " << entry.second << ";";
+    md << " |\n";
+  }
+  return md.str();
+}
+
+void write_bench_rows_csv(const std::string& path, const std::vector<BenchRow>& rows) {
+  write_file_atomically(path, [&](std::ostream& out) {
+    const std::vector<std::string>& columns = csv_columns();
+    for (std::size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c];
+    out << "\n";
+    for (const BenchRow& r : rows) {
+      out << r.task << "," << csv_field(r.pair_id) << "," << r.trial << "," << csv_field(r.method) << ","
+          << csv_field(r.difficulty) << "," << csv_field(r.kind) << "," << (r.has_ground_truth ? 1 : 0) << ","
+          << csv_field(r.status) << "," << (r.has_ground_truth ? (r.success ? "1" : "0") : "") << ","
+          << (r.has_ground_truth ? exact(r.rte) : "") << "," << (r.has_ground_truth ? exact(r.rre) : "") << ","
+          << exact(r.yaw_degrees) << "," << exact(r.shift_x) << "," << exact(r.shift_y) << "," << r.seed << ","
+          << r.correspondences << "," << r.inliers << "," << r.recalled << "," << r.source_model_bytes << ","
+          << r.target_model_bytes << "," << csv_field(timings_text(r.timings_ms)) << "," << csv_field(r.message) << "\n";
+    }
+  });
+}
+
+std::vector<BenchRow> read_bench_rows_csv(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) throw file_error(path, "cannot open the benchmark rows");
+  std::string line;
+  std::size_t line_number = 0;
+  std::vector<BenchRow> rows;
+  const std::vector<std::string>& columns = csv_columns();
+  while (std::getline(file, line)) {
+    ++line_number;
+    const std::string where = path + ":" + std::to_string(line_number);
+    const std::vector<std::string> fields = parse_csv_fields(line);
+    if (line_number == 1) {
+      if (fields != columns) throw Error(where + ": header is not the benchmark row header (" + columns.front() + ",...)");
+      continue;
+    }
+    if (line.empty()) continue;
+    if (fields.size() != columns.size())
+      throw Error(where + ": " + std::to_string(fields.size()) + " fields, expected " + std::to_string(columns.size()));
+    const auto number = [&](std::size_t c) {
+      try {
+        std::size_t used = 0;
+        const double value = std::stod(fields[c], &used);
+        if (used != fields[c].size()) throw std::invalid_argument(fields[c]);
+        return value;
+      } catch (const std::exception&) {
+        throw Error(where + ": column " + columns[c] + " '" + fields[c] + "' is not a number");
+      }
+    };
+    const auto integer = [&](std::size_t c) {
+      try {
+        std::size_t used = 0;
+        const long long value = std::stoll(fields[c], &used);
+        if (used != fields[c].size()) throw std::invalid_argument(fields[c]);
+        return value;
+      } catch (const std::exception&) {
+        throw Error(where + ": column " + columns[c] + " '" + fields[c] + "' is not an integer");
+      }
+    };
+    BenchRow r;
+    r.task = static_cast<std::size_t>(integer(0));
+    r.pair_id = fields[1];
+    r.trial = static_cast<int>(integer(2));
+    r.method = fields[3];
+    r.difficulty = fields[4];
+    r.kind = fields[5];
+    r.has_ground_truth = integer(6) != 0;
+    r.status = fields[7];
+    if (r.has_ground_truth) {
+      r.success = integer(8) != 0;
+      r.rte = number(9);
+      r.rre = number(10);
+    }
+    r.yaw_degrees = number(11);
+    r.shift_x = number(12);
+    r.shift_y = number(13);
+    r.seed = static_cast<std::uint64_t>(std::stoull(fields[14]));
+    r.correspondences = integer(15);
+    r.inliers = integer(16);
+    r.recalled = static_cast<int>(integer(17));
+    r.source_model_bytes = integer(18);
+    r.target_model_bytes = integer(19);
+    std::istringstream timings(fields[20]);
+    for (std::string entry; std::getline(timings, entry, ';');) {
+      const auto equals = entry.find('=');
+      if (equals == std::string::npos) throw Error(where + ": timings entry '" + entry + "' is not name=ms");
+      try {
+        r.timings_ms[entry.substr(0, equals)] = std::stod(entry.substr(equals + 1));
+      } catch (const std::exception&) {
+        throw Error(where + ": timings entry '" + entry + "' is not name=ms");
+      }
+    }
+    r.message = fields[21];
+    rows.push_back(std::move(r));
+  }
+  if (line_number == 0) throw file_error(path, "empty file (expected the benchmark row header)");
+  return rows;
+}
+
+std::vector<MethodSummary> write_bench_outputs(const std::string& folder, const std::vector<BenchRow>& rows,
+                                               const BenchRunInfo& info) {
+  fs::create_directories(folder);
+  const fs::path base(folder);
+  write_bench_rows_csv((base / "pairs.csv").string(), rows);
+  nlohmann::json run;
+  run["title"] = info.title;
+  run["methods"] = info.methods;
+  run["task_count"] = info.task_count;
+  run["shard_index"] = info.shard_index;
+  run["shard_count"] = info.shard_count;
+  run["options"] = info.options_text;
+  write_file_atomically((base / "run.json").string(), [&](std::ostream& out) { out << run.dump(2) << "\n"; });
+  const std::vector<MethodSummary> summaries = summarize_bench(rows, info.methods);
+  std::string title = info.title;
+  if (info.shard_count > 1) title += " (shard " + std::to_string(info.shard_index) + "/" + std::to_string(info.shard_count) + ")";
+  write_file_atomically((base / "summary.md").string(), [&](std::ostream& out) {
+    out << bench_summary_markdown(summaries, title) << "\nOptions: `" << info.options_text << "`\n";
+  });
+  write_file_atomically((base / "success_by_difficulty.svg").string(), [&](std::ostream& out) { out << bench_success_svg(summaries); });
+  write_file_atomically((base / "error_cdf.svg").string(), [&](std::ostream& out) { out << bench_error_cdf_svg(summaries); });
+  write_file_atomically((base / "time_per_stage.svg").string(), [&](std::ostream& out) { out << bench_time_svg(summaries); });
+  return summaries;
+}
+
+BenchRunInfo read_bench_run_info(const std::string& folder) {
+  const std::string path = (fs::path(folder) / "run.json").string();
+  std::ifstream file(path);
+  if (!file) throw file_error(path, "cannot open (is this a `quadrix bench --out` folder?)");
+  BenchRunInfo info;
+  try {
+    const nlohmann::json run = nlohmann::json::parse(file);
+    info.title = run.at("title").get<std::string>();
+    info.methods = run.at("methods").get<std::vector<std::string>>();
+    info.task_count = run.at("task_count").get<std::size_t>();
+    info.shard_index = run.at("shard_index").get<int>();
+    info.shard_count = run.at("shard_count").get<int>();
+    info.options_text = run.at("options").get<std::string>();
+  } catch (const nlohmann::json::exception& error) {
+    throw file_error(path, std::string("not a benchmark run description: ") + error.what());
+  }
+  return info;
+}
+
+namespace {
+
+// The " --method a,b" part of a run's options text, and the text without it: runs of other methods
+// over the same tasks (same pairs, trials, seed and options) merge into one run of all methods.
+std::pair<std::string, std::string> split_method_option(const std::string& options_text) {
+  const std::string flag = " --method ";
+  const std::size_t begin = options_text.find(flag);
+  if (begin == std::string::npos) return {options_text, ""};
+  const std::size_t value = begin + flag.size();
+  const std::size_t end = std::min(options_text.find(' ', value), options_text.size());
+  return {options_text.substr(0, begin) + options_text.substr(end), options_text.substr(value, end - value)};
+}
+
+}  // namespace
+
+std::vector<MethodSummary> merge_bench_outputs(const std::vector<std::string>& folders, const std::string& out_folder) {
+  if (folders.empty()) throw Error("bench merge: no folder given");
+  BenchRunInfo merged = read_bench_run_info(folders.front());
+  const auto [common_options, first_methods] = split_method_option(merged.options_text);
+  std::vector<BenchRow> rows;
+  for (const std::string& folder : folders) {
+    const BenchRunInfo info = read_bench_run_info(folder);
+    if (split_method_option(info.options_text).first != common_options || info.task_count != merged.task_count ||
+        info.title != merged.title)
+      throw file_error((fs::path(folder) / "run.json").string(),
+                       "belongs to another run (options other than --method, title or task count differ from " +
+                           folders.front() + ")");
+    for (const std::string& method : info.methods)
+      if (std::find(merged.methods.begin(), merged.methods.end(), method) == merged.methods.end())
+        merged.methods.push_back(method);
+    const std::vector<BenchRow> part = read_bench_rows_csv((fs::path(folder) / "pairs.csv").string());
+    rows.insert(rows.end(), part.begin(), part.end());
+  }
+  if (!first_methods.empty()) {
+    std::string methods;
+    for (const std::string& method : merged.methods) methods += (methods.empty() ? "" : ",") + method;
+    merged.options_text.replace(merged.options_text.find(" --method ") + std::string(" --method ").size(),
+                                first_methods.size(), methods);
+  }
+  const auto method_rank = [&](const std::string& method) {
+    return static_cast<std::size_t>(std::find(merged.methods.begin(), merged.methods.end(), method) - merged.methods.begin());
+  };
+  std::sort(rows.begin(), rows.end(), [&](const BenchRow& a, const BenchRow& b) {
+    return a.task != b.task ? a.task < b.task : method_rank(a.method) < method_rank(b.method);
+  });
+  std::set<std::pair<std::size_t, std::string>> seen;
+  for (const BenchRow& row : rows)
+    if (!seen.insert({row.task, row.method}).second)
+      throw Error("bench merge: task " + std::to_string(row.task) + " (" + row.pair_id + ", " + row.method +
+                  ") appears in more than one folder");
+  std::string missing;
+  std::size_t missing_count = 0;
+  for (std::size_t task = 0; task < merged.task_count; ++task)
+    for (const std::string& method : merged.methods)
+      if (!seen.count({task, method})) {
+        if (++missing_count <= 10) missing += (missing.empty() ? "" : ", ") + std::to_string(task) + "/" + method;
+      }
+  if (missing_count)
+    throw Error("bench merge: " + std::to_string(missing_count) + " task rows are missing (task/method: " + missing +
+                (missing_count > 10 ? ", ..." : "") + "); give every shard folder of every method");
+  merged.shard_index = 1;
+  merged.shard_count = 1;
+  return write_bench_outputs(out_folder, rows, merged);
+}
+
+std::string bench_success_svg(const std::vector<MethodSummary>& summaries) {
+  const std::vector<std::string> difficulties = difficulty_order(nullptr, summaries);
+  const int left = 60, top = 40, plot_height = 240, group_width = std::max<int>(60, 24 * static_cast<int>(summaries.size()) + 30);
+  const int width = left + group_width * static_cast<int>(std::max<std::size_t>(difficulties.size(), 1)) + 180;
+  const int height = top + plot_height + 60;
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+      << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  svg << "<text x=\"" << left << "\" y=\"20\" font-size=\"14\">Success rate per difficulty (RTE &lt;= 2 m, RRE &lt;= 5 deg)</text>\n";
+  for (int percent = 0; percent <= 100; percent += 25) {
+    const double y = top + plot_height * (1.0 - percent / 100.0);
+    svg << "<line x1=\"" << left << "\" x2=\"" << width - 180 << "\" y1=\"" << y << "\" y2=\"" << y << "\" stroke=\"#ddd\"/>"
+        << "<text x=\"" << left - 8 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">" << percent << "%</text>\n";
+  }
+  for (std::size_t d = 0; d < difficulties.size(); ++d) {
+    const int x0 = left + group_width * static_cast<int>(d) + 15;
+    for (std::size_t m = 0; m < summaries.size(); ++m) {
+      const auto found = summaries[m].by_difficulty.find(difficulties[d]);
+      if (found == summaries[m].by_difficulty.end() || found->second.second == 0) continue;
+      const double rate = double(found->second.first) / double(found->second.second);
+      const double bar = plot_height * rate;
+      svg << "<rect x=\"" << x0 + 24 * static_cast<int>(m) << "\" y=\"" << top + plot_height - bar << "\" width=\"20\" height=\""
+          << bar << "\" fill=\"" << colour(m) << "\"><title>" << escape_xml(summaries[m].method) << " "
+          << escape_xml(difficulties[d]) << ": " << found->second.first << "/" << found->second.second << "</title></rect>\n";
+    }
+    svg << "<text x=\"" << x0 + 12 * static_cast<int>(summaries.size()) << "\" y=\"" << top + plot_height + 18
+        << "\" text-anchor=\"middle\">" << escape_xml(difficulties[d]) << "</text>\n";
+  }
+  return with_method_legend(svg.str(), summaries, width - 170, top);
+}
+
+std::string bench_error_cdf_svg(const std::vector<MethodSummary>& summaries) {
+  const int panel_width = 320, panel_height = 220, left = 60, top = 40, gap = 80;
+  const int width = left + 2 * panel_width + gap + 180;
+  const int height = top + panel_height + 60;
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+      << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  // Errors are plotted up to twice the success threshold; the dashed line marks the threshold.
+  const struct {
+    const char* name;
+    double limit;
+    double threshold;
+  } panels[2] = {{"RTE (m)", 4.0, 2.0}, {"RRE (deg)", 10.0, 5.0}};
+  for (int p = 0; p < 2; ++p) {
+    const int x0 = left + p * (panel_width + gap);
+    svg << "<text x=\"" << x0 << "\" y=\"20\" font-size=\"14\">CDF of " << panels[p].name << ", pairs with ground truth</text>\n";
+    svg << "<rect x=\"" << x0 << "\" y=\"" << top << "\" width=\"" << panel_width << "\" height=\"" << panel_height
+        << "\" fill=\"none\" stroke=\"#888\"/>\n";
+    const double threshold_x = x0 + panel_width * panels[p].threshold / panels[p].limit;
+    svg << "<line x1=\"" << threshold_x << "\" x2=\"" << threshold_x << "\" y1=\"" << top << "\" y2=\"" << top + panel_height
+        << "\" stroke=\"#999\" stroke-dasharray=\"4,3\"/>\n";
+    for (int tick = 0; tick <= 4; ++tick) {
+      const double value = panels[p].limit * tick / 4.0;
+      svg << "<text x=\"" << x0 + panel_width * tick / 4 << "\" y=\"" << top + panel_height + 16 << "\" text-anchor=\"middle\">"
+          << format("%g", value) << "</text>\n";
+      svg << "<text x=\"" << x0 - 6 << "\" y=\"" << top + panel_height * (4 - tick) / 4 + 4 << "\" text-anchor=\"end\">"
+          << 25 * tick << "%</text>\n";
+    }
+    for (std::size_t m = 0; m < summaries.size(); ++m) {
+      std::vector<double> values = p == 0 ? summaries[m].rte_values : summaries[m].rre_values;
+      if (values.empty()) continue;
+      std::sort(values.begin(), values.end());
+      std::ostringstream points;
+      double previous_y = top + panel_height;
+      points << x0 << "," << previous_y;
+      for (std::size_t k = 0; k < values.size(); ++k) {
+        const double x = x0 + panel_width * std::min(values[k], panels[p].limit) / panels[p].limit;
+        const double y = top + panel_height * (1.0 - double(k + 1) / double(values.size()));
+        points << " " << x << "," << previous_y << " " << x << "," << y;
+        previous_y = y;
+      }
+      points << " " << x0 + panel_width << "," << previous_y;
+      svg << "<polyline fill=\"none\" stroke-width=\"2\" stroke=\"" << colour(m) << "\" points=\"" << points.str() << "\"/>\n";
+    }
+  }
+  return with_method_legend(svg.str(), summaries, width - 170, top);
+}
+
+std::string bench_time_svg(const std::vector<MethodSummary>& summaries) {
+  std::vector<std::string> stages;
+  double longest = 0.0;
+  for (const MethodSummary& s : summaries) {
+    double sum = 0.0;
+    for (const std::string& stage : ordered_stages(s.stage_ms)) {
+      if (std::find(stages.begin(), stages.end(), stage) == stages.end()) stages.push_back(stage);
+      sum += s.stage_ms.at(stage).first;
+    }
+    longest = std::max(longest, sum);
+  }
+  if (!(longest > 0.0)) longest = 1.0;
+  const int left = 140, top = 40, bar_height = 22, plot_width = 460;
+  const int height = top + 30 * static_cast<int>(summaries.size()) + 40 + 18 * static_cast<int>(stages.size());
+  const int width = left + plot_width + 40;
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+      << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  svg << "<text x=\"10\" y=\"20\" font-size=\"14\">Median time per stage (ms; bar length = sum of stage medians, longest "
+      << format("%.0f", longest) << " ms)</text>\n";
+  for (std::size_t m = 0; m < summaries.size(); ++m) {
+    const int y = top + 30 * static_cast<int>(m);
+    svg << "<text x=\"" << left - 8 << "\" y=\"" << y + 15 << "\" text-anchor=\"end\">" << escape_xml(summaries[m].method) << "</text>\n";
+    double x = left;
+    for (std::size_t k = 0; k < stages.size(); ++k) {
+      const auto found = summaries[m].stage_ms.find(stages[k]);
+      if (found == summaries[m].stage_ms.end()) continue;
+      const double w = plot_width * found->second.first / longest;
+      svg << "<rect x=\"" << x << "\" y=\"" << y << "\" width=\"" << w << "\" height=\"" << bar_height << "\" fill=\"" << colour(k)
+          << "\"><title>" << escape_xml(stages[k]) << ": " << format("%.2f", found->second.first) << " ms</title></rect>\n";
+      x += w;
+    }
+  }
+  const int legend_top = top + 30 * static_cast<int>(summaries.size()) + 20;
+  for (std::size_t k = 0; k < stages.size(); ++k)
+    svg << "<rect x=\"" << left << "\" y=\"" << legend_top + 18 * static_cast<int>(k) << "\" width=\"12\" height=\"12\" fill=\""
+        << colour(k) << "\"/><text x=\"" << left + 18 << "\" y=\"" << legend_top + 10 + 18 * static_cast<int>(k) << "\">"
+        << escape_xml(stages[k]) << "</text>\n";
+  svg << "</svg>\n";
+  return svg.str();
+}
+
+}  // namespace quadrix

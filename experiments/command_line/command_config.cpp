@@ -1,0 +1,53 @@
+// `quadrix config [CLOUD] [--preset P|auto] [--config FILE.yaml]`: prints the
+// effective registration parameters as YAML (the schema of estimation/presets/*.yaml), so a user
+// sees exactly what a preset, `auto` on their cloud, and their overrides amount to, and can save,
+// edit and pass the result back with `quadrix register --config`.
+#include "experiments/command_line/command_registry.h"
+#include "estimation/registration_config.h"
+#include "geometry/error.h"
+#include "geometry/io.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace quadrix::cli {
+namespace {
+
+struct ConfigCommandOptions {
+  std::string cloud;            ///< cloud the auto preset measures (required for auto)
+  std::string preset = "auto";  ///< preset name or auto
+  std::string config;           ///< YAML overrides applied after the preset
+};
+
+void run(const ConfigCommandOptions& options) {
+  if (options.preset == "auto" && options.cloud.empty())
+    throw Error("quadrix config: --preset auto measures a cloud: give CLOUD, or name a preset with --preset");
+  if (!options.config.empty() && !std::filesystem::exists(options.config))
+    throw file_error(options.config, "configuration file does not exist");
+  const PointCloud cloud = options.cloud.empty() ? PointCloud{} : read_point_cloud(options.cloud);
+  std::string notes;
+  RegistrationOptions registration = resolve_registration_options(options.preset, cloud, options.preset, cloud, &notes);
+  if (!options.config.empty()) apply_registration_config(options.config, registration);
+  std::printf("# quadrix config: preset %s%s%s\n", registration.source_extraction.preset.c_str(),
+              options.cloud.empty() ? "" : " for ", options.cloud.c_str());
+  if (!notes.empty()) std::printf("# %s\n", notes.c_str());
+  std::printf("sensor: %s\n%s", registration.source_extraction.preset.c_str(),
+              registration_config_yaml(registration).c_str());
+}
+
+const CommandRegistration registration(55, [](CLI::App& app) {
+  auto options = std::make_shared<ConfigCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "config", "Print the effective registration parameters as YAML (a preset, or auto measured on CLOUD, plus --config)");
+  command->add_option("cloud", options->cloud, "Point cloud the auto preset measures (any supported format)");
+  std::string presets;
+  for (const auto& name : registration_preset_names()) presets += name + "|";
+  command->add_option("--preset", options->preset, "Sensor preset: " + presets + "auto")->capture_default_str();
+  command->add_option("--config", options->config, "YAML overrides applied after the preset");
+  command->callback([options] { run(*options); });
+});
+
+}  // namespace
+}  // namespace quadrix::cli

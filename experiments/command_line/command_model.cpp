@@ -1,0 +1,289 @@
+// `quadrix model INPUT... [--poses P,...] --out model.json [--binary model.qsm] [--mesh model.ply]
+// [--elements elements.ply] [--picture model.png] [--preset P] [--labels FILE] [--fitter NAME]`:
+// the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose)
+// (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling").
+#include "experiments/command_line/command_registry.h"
+#include "experiments/reports/model_picture.h"
+#include "estimation/registration_config.h"
+#include "fitting/scene_modelling.h"
+#include "geometry/error.h"
+#include "geometry/io.h"
+#include "geometry/mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+
+namespace quadrix::cli {
+namespace {
+
+struct ModelCommandOptions {
+  std::vector<std::string> inputs;    ///< point-cloud files (several: stations of one static scan, merged with `poses`)
+  std::vector<std::string> poses;     ///< sensor -> world pose file of each input (4x4 row-major), for merging
+  std::string format = "auto";        ///< input format override
+  std::string preset = "vlp64";       ///< extraction preset
+  std::string labels;                 ///< SemanticKITTI .label file (switches to the labels semantic mode)
+  std::string fitter;                 ///< QuadricFitter registry name (empty: the preset's)
+  std::string plane_method = "voxel"; ///< voxel (paper) or cgal (CGAL region growing)
+  std::string out;                    ///< model JSON
+  std::string binary;                 ///< model binary (.qsm)
+  std::string mesh;                   ///< PLY mesh of the fitted quadrics
+  std::string elements;               ///< PLY of the element points coloured per element
+  std::string picture;                ///< PNG picture of the mesh
+  double view_azimuth_deg = -60.0;    ///< picture camera azimuth, degrees
+  double view_elevation_deg = 30.0;   ///< picture camera elevation, degrees
+  double view_zoom = 1.0;             ///< picture zoom (> 1: closer)
+};
+
+// A distinct colour per element (golden-ratio hue walk, full saturation).
+std::array<std::uint8_t, 3> element_color(std::size_t index) {
+  const double hue = std::fmod(0.13 + 0.618033988749895 * static_cast<double>(index), 1.0) * 6.0;
+  const double x = 1.0 - std::abs(std::fmod(hue, 2.0) - 1.0);
+  double r = 0, g = 0, b = 0;
+  switch (static_cast<int>(hue)) {
+    case 0: r = 1; g = x; break;
+    case 1: r = x; g = 1; break;
+    case 2: g = 1; b = x; break;
+    case 3: g = x; b = 1; break;
+    case 4: r = x; b = 1; break;
+    default: r = 1; b = x; break;
+  }
+  const auto byte = [](double v) { return static_cast<std::uint8_t>(std::lround(40.0 + 215.0 * v)); };
+  return {byte(r), byte(g), byte(b)};
+}
+
+TriangleMesh model_mesh(const ModellingResult& result, const Eigen::Matrix3Xd& points) {
+  TriangleMesh mesh;
+  for (std::size_t record_index = 0; record_index < result.model.augmented_begin; ++record_index) {
+    const QuadricDecomposition shape = result.model.records[record_index].quadric().decompose();
+    if (shape.type == QuadricType::Invalid || shape.type == QuadricType::Imaginary) continue;
+    const Element& element = result.extraction.elements[static_cast<std::size_t>(result.record_elements[record_index])];
+    // The extent: the element's points in the quadric's canonical frame, with a small margin.
+    const Eigen::Isometry3d to_local = shape.pose().inverse();
+    LocalExtent extent;
+    extent.minimum = Eigen::Vector3d::Constant(1e300);
+    extent.maximum = Eigen::Vector3d::Constant(-1e300);
+    for (const std::uint32_t index : element.point_indices) {
+      const Eigen::Vector3d local = to_local * Eigen::Vector3d(points.col(index));
+      extent.minimum = extent.minimum.cwiseMin(local);
+      extent.maximum = extent.maximum.cwiseMax(local);
+    }
+    extent.minimum.array() -= 0.05;
+    extent.maximum.array() += 0.05;
+    append_mesh(mesh, mesh_surface(shape, extent, 24), quadric_type_color(result.model.types[record_index]));
+  }
+  return mesh;
+}
+
+PointCloud element_cloud(const ModellingResult& result, const PointCloud& cloud) {
+  std::size_t total = 0;
+  for (const Element& element : result.extraction.elements) total += element.point_indices.size();
+  PointCloud out;
+  out.positions.resize(3, static_cast<Eigen::Index>(total));
+  std::vector<float> element_ids;
+  element_ids.reserve(total);
+  Eigen::Index column = 0;
+  for (std::size_t e = 0; e < result.extraction.elements.size(); ++e) {
+    const Element& element = result.extraction.elements[e];
+    const auto color = element.element_class == ElementClass::Ground ? std::array<std::uint8_t, 3>{150, 120, 90}
+                                                                      : element_color(e);
+    for (const std::uint32_t index : element.point_indices) {
+      out.positions.col(column++) = cloud.positions.col(index);
+      out.colors.push_back(color);
+      out.labels.push_back(static_cast<std::uint32_t>(element.element_class));
+      element_ids.push_back(static_cast<float>(e));
+    }
+  }
+  out.extra_fields["element"] = std::move(element_ids);
+  return out;
+}
+
+std::string human_bytes(double bytes) {
+  char buffer[32];
+  if (bytes >= 1024.0 * 1024.0)
+    std::snprintf(buffer, sizeof buffer, "%.2f MiB", bytes / (1024.0 * 1024.0));
+  else if (bytes >= 1024.0)
+    std::snprintf(buffer, sizeof buffer, "%.1f KiB", bytes / 1024.0);
+  else
+    std::snprintf(buffer, sizeof buffer, "%.0f B", bytes);
+  return buffer;
+}
+
+// One input as read, or several moved into the world frame by their poses and concatenated
+// (labels and extra fields are kept only when every input has them).
+PointCloud read_merged_clouds(const ModelCommandOptions& options, const CloudReadOptions& read_options) {
+  if (options.inputs.size() == 1 && options.poses.empty()) return read_point_cloud(options.inputs.front(), read_options);
+  if (options.poses.size() != options.inputs.size())
+    throw Error("--poses: " + std::to_string(options.poses.size()) + " pose files for " +
+                std::to_string(options.inputs.size()) + " inputs (expected one per input)");
+  std::vector<PointCloud> clouds;
+  std::size_t total = 0;
+  for (std::size_t i = 0; i < options.inputs.size(); ++i) {
+    clouds.push_back(read_point_cloud(options.inputs[i], read_options));
+    const Eigen::Isometry3f pose = read_pose_matrix(options.poses[i]).cast<float>();
+    for (Eigen::Index column = 0; column < clouds.back().positions.cols(); ++column)
+      clouds.back().positions.col(column) = pose * Eigen::Vector3f(clouds.back().positions.col(column));
+    total += clouds.back().size();
+  }
+  PointCloud merged;
+  merged.positions.resize(3, static_cast<Eigen::Index>(total));
+  Eigen::Index column = 0;
+  for (const PointCloud& cloud : clouds) {
+    merged.positions.middleCols(column, cloud.positions.cols()) = cloud.positions;
+    column += cloud.positions.cols();
+  }
+  const bool all_labelled = std::all_of(clouds.begin(), clouds.end(), [](const PointCloud& c) { return !c.labels.empty(); });
+  for (const PointCloud& cloud : clouds) {
+    if (all_labelled) merged.labels.insert(merged.labels.end(), cloud.labels.begin(), cloud.labels.end());
+    for (const auto& [name, values] : clouds.front().extra_fields) {
+      const auto field = cloud.extra_fields.find(name);
+      if (field == cloud.extra_fields.end()) continue;
+      std::vector<float>& values_out = merged.extra_fields[name];
+      values_out.insert(values_out.end(), field->second.begin(), field->second.end());
+    }
+  }
+  for (auto it = merged.extra_fields.begin(); it != merged.extra_fields.end();)
+    it = it->second.size() == total ? std::next(it) : merged.extra_fields.erase(it);
+  return merged;
+}
+
+void run(const ModelCommandOptions& options) {
+  ExtractionOptions extraction = extraction_preset(options.preset);
+  if (options.plane_method == "cgal")
+    extraction.planes.method = PlaneMethod::CgalRegionGrowing;
+  else if (options.plane_method != "voxel")
+    throw Error("--plane-method: expected voxel or cgal, got '" + options.plane_method + "'");
+  ModellingOptions modelling = registration_preset(options.preset).modelling;
+  if (!options.fitter.empty()) modelling.fitter = options.fitter;
+  make_quadric_fitter(modelling.fitter);  // fail early with the list of fitters
+
+  CloudReadOptions read_options;
+  read_options.format = cloud_format_from_name(options.format);
+  const PointCloud cloud = read_merged_clouds(options, read_options);
+  std::vector<std::uint32_t> labels;
+  if (!options.labels.empty()) {
+    labels = read_semantic_kitti_labels(options.labels, cloud.size());
+    extraction.semantic_mode = SemanticMode::Labels;
+  }
+  const ModellingResult result = model_scene(cloud, extraction, modelling, labels);
+  const SceneModel& model = result.model;
+
+  // Counts per class and type (quadrics kept in the model; elements extracted).
+  std::map<std::pair<std::string, std::string>, int> quadric_counts;
+  std::map<std::string, int> element_counts;
+  for (std::size_t i = 0; i < model.augmented_begin; ++i)
+    ++quadric_counts[{element_class_name(element_class_from_label(model.records[i].label)), quadric_type_name(model.types[i])}];
+  for (const Element& element : result.extraction.elements) ++element_counts[element_class_name(element.element_class)];
+  const std::string binary_bytes = scene_model_to_binary(model);
+  double raw_bytes = 0.0;
+  for (const std::string& input : options.inputs)
+    if (std::filesystem::exists(input)) raw_bytes += static_cast<double>(std::filesystem::file_size(input));
+
+  std::string extra = "\"input\": \"" + std::filesystem::path(options.inputs.front()).filename().string() + "\", \"inputs\": " +
+                      std::to_string(options.inputs.size()) + ", \"preset\": \"" +
+                      options.preset + "\", \"fitter\": \"" + modelling.fitter + "\", \"status\": \"" +
+                      modelling_status_name(result.status) + "\", \"extraction_status\": \"" +
+                      extraction_status_name(result.extraction.status) + "\", \"raw_cloud_bytes\": " +
+                      std::to_string(static_cast<long long>(raw_bytes)) + ", \"elements_by_class\": {";
+  bool first = true;
+  for (const auto& [name, count] : element_counts) {
+    extra += std::string(first ? "" : ", ") + "\"" + name + "\": " + std::to_string(count);
+    first = false;
+  }
+  extra += "}";
+  write_scene_model_json(options.out, model, extra);
+  if (!options.binary.empty()) write_scene_model_binary(options.binary, model);
+  const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
+  if (!options.mesh.empty() || !options.picture.empty()) {
+    const TriangleMesh mesh = model_mesh(result, points);
+    if (!options.mesh.empty()) write_mesh_ply(options.mesh, mesh);
+    if (!options.picture.empty()) {
+      if (mesh.triangles.empty()) throw Error("--picture " + options.picture + ": the model has no quadric to draw");
+      MeshPictureOptions view;
+      view.azimuth_deg = options.view_azimuth_deg;
+      view.elevation_deg = options.view_elevation_deg;
+      view.zoom = options.view_zoom;
+      write_mesh_picture(options.picture, mesh, view);
+    }
+  }
+  if (!options.elements.empty()) write_point_cloud(options.elements, element_cloud(result, cloud));
+
+  std::printf("quadrix model %s%s  (%zu points, %zu in range, preset %s, fitter %s)\n", options.inputs.front().c_str(),
+              options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
+              result.extraction.points_in_range, options.preset.c_str(), modelling.fitter.c_str());
+  std::printf("status: %s%s%s\n\n", modelling_status_name(result.status).c_str(), result.message.empty() ? "" : " - ",
+              result.message.c_str());
+  std::printf("%-12s %-20s %9s %9s\n", "class", "type", "elements", "quadrics");
+  for (const auto& [key, count] : quadric_counts)
+    std::printf("%-12s %-20s %9d %9d\n", key.first.c_str(), key.second.c_str(), element_counts[key.first], count);
+  for (const auto& [name, count] : element_counts) {
+    bool listed = false;
+    for (const auto& [key, unused] : quadric_counts) listed = listed || key.first == name;
+    if (!listed) std::printf("%-12s %-20s %9d %9d\n", name.c_str(), "(not fitted)", count, 0);
+  }
+  std::printf("%-12s %-20s %9s %9zu\n", "augmented", "point", "", model.augmented_count());
+  std::printf("%-12s %-20s %9zu %9zu\n\n", "total", "", result.extraction.elements.size(), model.size());
+  std::printf("timings (ms, 2 shared cores):");
+  for (const char* stage : {"crop", "ground", "planes", "clusters", "lines", "simplification", "normals", "shape_detection",
+                            "fitting", "selection", "augmentation", "total"}) {
+    const auto it = model.timings_ms.find(stage);
+    if (it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);
+  }
+  std::printf("\nmodel: %s binary (%zu records x 21 numbers)", human_bytes(static_cast<double>(binary_bytes.size())).c_str(),
+              model.size());
+  if (raw_bytes > 0.0)
+    std::printf(" vs raw cloud %s (%.0fx smaller)", human_bytes(raw_bytes).c_str(),
+                raw_bytes / static_cast<double>(binary_bytes.size()));
+  std::printf("\nground: %s", model.has_ground ? "found" : "not found");
+  if (model.has_ground)
+    std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f m", model.ground_normal.x(), model.ground_normal.y(),
+                model.ground_normal.z(), model.ground_offset);
+  std::printf("\nwrote %s", options.out.c_str());
+  for (const std::string* path : {&options.binary, &options.mesh, &options.elements, &options.picture})
+    if (!path->empty()) std::printf(", %s", path->c_str());
+  std::printf("\n");
+}
+
+const CommandRegistration registration(50, [](CLI::App& app) {
+  auto options = std::make_shared<ModelCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "model", "Model a point cloud with quadrics (paper's scene representation) and write JSON/binary/mesh");
+  command->add_option("input", options->inputs, "Point cloud (any supported format); several with --poses are merged")
+      ->required();
+  command->add_option("--poses", options->poses,
+                      "Sensor-to-world pose file (4x4) per input, comma-separated: the inputs are merged in the world "
+                      "frame (TLS stations)")
+      ->delimiter(',');
+  std::string presets;
+  for (const auto& name : extraction_preset_names()) presets += (presets.empty() ? "" : "|") + name;
+  command->add_option("--preset", options->preset, "Sensor preset: " + presets)->capture_default_str();
+  command->add_option("--labels", options->labels,
+                      "SemanticKITTI .label file: use the labels semantic mode instead of geometry-only clusters");
+  std::string fitters;
+  for (const auto& name : quadric_fitter_names()) fitters += (fitters.empty() ? "" : ", ") + name;
+  command->add_option("--fitter", options->fitter,
+                      "Quadric fitter: " + fitters + " (default: the preset's; statistical, constrained for monument)");
+  command->add_option("--plane-method", options->plane_method,
+                      "voxel (paper: voxel eigenvalue ratio + region growing) or cgal (CGAL region growing)")
+      ->capture_default_str();
+  command->add_option("--format", options->format, "Input format override (see `quadrix info --help`)")
+      ->capture_default_str();
+  command->add_option("--out", options->out, "Model JSON (quadrics array + stats)")->required();
+  command->add_option("--binary", options->binary, "Compact binary model (.qsm)");
+  command->add_option("--mesh", options->mesh, "PLY mesh of every fitted quadric inside its extent, coloured by type");
+  command->add_option("--elements", options->elements, "PLY of the element points, coloured per element");
+  command->add_option("--picture", options->picture, "PNG picture of the mesh (z-buffer rendering, colours by type)");
+  command->add_option("--view-azimuth", options->view_azimuth_deg, "Picture camera azimuth around the up axis, degrees")
+      ->capture_default_str();
+  command->add_option("--view-elevation", options->view_elevation_deg, "Picture camera elevation, degrees (-89..89)")
+      ->capture_default_str();
+  command->add_option("--view-zoom", options->view_zoom, "Picture zoom (> 1 moves the camera closer)")->capture_default_str();
+  command->callback([options] { run(*options); });
+});
+
+}  // namespace
+}  // namespace quadrix::cli

@@ -1,0 +1,156 @@
+// Z-buffer rasteriser for model pictures (see model_picture.h).
+#include "experiments/reports/model_picture.h"
+
+#include "geometry/error.h"
+#include "geometry/io.h"
+
+// The one translation unit holding stb's PNG writer (bev.png and model pictures both use write_rgb_png).
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#include <stb/stb_image_write.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace quadrix {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+void check_range(const char* name, double value, double minimum, double maximum) {
+  if (!(value >= minimum && value <= maximum))
+    throw Error(std::string("mesh picture option ") + name + " must be within " + std::to_string(minimum) + ".." +
+                std::to_string(maximum) + ", got " + std::to_string(value));
+}
+
+}  // namespace
+
+RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options) {
+  if (mesh.vertices.cols() == 0 || mesh.triangles.empty()) throw Error("render_mesh: the mesh has no triangles");
+  check_range("width", options.width, 64, 8192);
+  check_range("height", options.height, 64, 8192);
+  check_range("supersampling", options.supersampling, 1, 4);
+  check_range("field_of_view_deg", options.field_of_view_deg, 0.0, 120.0);
+  check_range("zoom", options.zoom, 0.05, 100.0);
+  check_range("elevation_deg", options.elevation_deg, -89.0, 89.0);
+  if (!(options.up.norm() > 0.0)) throw Error("mesh picture option up must be a non-zero vector");
+
+  // Camera frame: looks at the centre of the vertices' bounding box from the azimuth/elevation direction.
+  const Eigen::Vector3d lower = mesh.vertices.rowwise().minCoeff(), upper = mesh.vertices.rowwise().maxCoeff();
+  const Eigen::Vector3d centre = 0.5 * (lower + upper);
+  const double radius = std::max(1e-6, 0.5 * (upper - lower).norm()) / options.zoom;
+  const Eigen::Vector3d up = options.up.normalized();
+  const Eigen::Vector3d helper = std::abs(up.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d east = (helper - helper.dot(up) * up).normalized(), north = up.cross(east);
+  const double azimuth = options.azimuth_deg * kPi / 180.0, elevation = options.elevation_deg * kPi / 180.0;
+  const Eigen::Vector3d towards_camera =
+      (std::cos(elevation) * (std::cos(azimuth) * east + std::sin(azimuth) * north) + std::sin(elevation) * up).normalized();
+  const Eigen::Vector3d forward = -towards_camera;
+  const Eigen::Vector3d right = forward.cross(up).normalized();
+  const Eigen::Vector3d camera_up = right.cross(forward);
+  const bool perspective = options.field_of_view_deg > 0.0;
+  const double half_angle = 0.5 * options.field_of_view_deg * kPi / 180.0;
+  const double distance = perspective ? radius / std::sin(half_angle) : 2.0 * radius;
+  const Eigen::Vector3d eye = centre + distance * towards_camera;
+
+  const int width = options.width * options.supersampling, height = options.height * options.supersampling;
+  // Pixels per unit of the image plane: the bounding sphere spans the shorter side.
+  const double focal = 0.5 * std::min(width, height) / (perspective ? std::tan(half_angle) : radius);
+  const double cx = 0.5 * width, cy = 0.5 * height;
+
+  std::vector<Eigen::Vector3d> screen(static_cast<std::size_t>(mesh.vertices.cols()));  // x, y pixels, depth
+  for (Eigen::Index v = 0; v < mesh.vertices.cols(); ++v) {
+    const Eigen::Vector3d relative = mesh.vertices.col(v) - eye;
+    const double depth = relative.dot(forward);
+    const double divisor = perspective ? std::max(depth, 1e-6) : 1.0;
+    screen[static_cast<std::size_t>(v)] = Eigen::Vector3d(cx + focal * relative.dot(right) / divisor,
+                                                          cy - focal * relative.dot(camera_up) / divisor, depth);
+  }
+  std::vector<double> depth_buffer(static_cast<std::size_t>(width) * height, std::numeric_limits<double>::infinity());
+  std::vector<std::array<double, 3>> colour(static_cast<std::size_t>(width) * height,
+                                             {static_cast<double>(options.background[0]),
+                                              static_cast<double>(options.background[1]),
+                                              static_cast<double>(options.background[2])});
+  // Key light from over the viewer's left shoulder, plus ambient; two-sided (open surfaces).
+  const Eigen::Vector3d light = (towards_camera + 0.6 * camera_up - 0.4 * right).normalized();
+  const bool coloured = mesh.colors.size() == static_cast<std::size_t>(mesh.vertices.cols());
+  for (const Eigen::Vector3i& triangle : mesh.triangles) {
+    if ((triangle.array() < 0).any() || (triangle.array() >= mesh.vertices.cols()).any())
+      throw Error("render_mesh: a triangle names a vertex beyond the " + std::to_string(mesh.vertices.cols()) + " vertices");
+    const Eigen::Vector3d& a = screen[static_cast<std::size_t>(triangle[0])];
+    const Eigen::Vector3d& b = screen[static_cast<std::size_t>(triangle[1])];
+    const Eigen::Vector3d& c = screen[static_cast<std::size_t>(triangle[2])];
+    if (perspective && (a.z() <= 1e-3 || b.z() <= 1e-3 || c.z() <= 1e-3)) continue;  // behind the camera
+    const double area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+    if (std::abs(area) < 1e-12) continue;
+    const Eigen::Vector3d normal = (mesh.vertices.col(triangle[1]) - mesh.vertices.col(triangle[0]))
+                                       .cross(mesh.vertices.col(triangle[2]) - mesh.vertices.col(triangle[0]));
+    if (!(normal.norm() > 0.0)) continue;
+    const double shade = 0.35 + 0.65 * std::abs(normal.normalized().dot(light));
+    std::array<double, 3> base = {170.0, 170.0, 170.0};
+    if (coloured)
+      for (int k = 0; k < 3; ++k)
+        base[k] = (mesh.colors[static_cast<std::size_t>(triangle[0])][k] + mesh.colors[static_cast<std::size_t>(triangle[1])][k] +
+                   mesh.colors[static_cast<std::size_t>(triangle[2])][k]) / 3.0;
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
+    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
+    const int y1 = std::min(height - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), c.y()}))));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const double px = x + 0.5, py = y + 0.5;
+        const double wa = ((b.x() - px) * (c.y() - py) - (b.y() - py) * (c.x() - px)) / area;
+        const double wb = ((c.x() - px) * (a.y() - py) - (c.y() - py) * (a.x() - px)) / area;
+        const double wc = 1.0 - wa - wb;
+        if (wa < 0.0 || wb < 0.0 || wc < 0.0) continue;
+        const double depth = wa * a.z() + wb * b.z() + wc * c.z();
+        const std::size_t pixel = static_cast<std::size_t>(y) * width + x;
+        if (depth >= depth_buffer[pixel]) continue;
+        depth_buffer[pixel] = depth;
+        for (int k = 0; k < 3; ++k) colour[pixel][k] = base[k] * shade;
+      }
+  }
+  RgbImage image;
+  image.width = options.width;
+  image.height = options.height;
+  image.pixels.resize(static_cast<std::size_t>(image.width) * image.height * 3);
+  const int factor = options.supersampling;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int k = 0; k < 3; ++k) {
+        double sum = 0.0;
+        for (int dy = 0; dy < factor; ++dy)
+          for (int dx = 0; dx < factor; ++dx)
+            sum += colour[static_cast<std::size_t>(y * factor + dy) * width + (x * factor + dx)][k];
+        image.pixels[(static_cast<std::size_t>(y) * image.width + x) * 3 + k] =
+            static_cast<std::uint8_t>(std::clamp(std::lround(sum / (factor * factor)), 0L, 255L));
+      }
+  return image;
+}
+
+void write_rgb_png(const std::string& path, const RgbImage& image) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 3)
+    throw file_error(path, "image of " + std::to_string(image.width) + " x " + std::to_string(image.height) + " pixels has " +
+                               std::to_string(image.pixels.size()) + " bytes (expected width x height x 3)");
+  std::vector<std::uint8_t> png;
+  const auto append = [](void* context, void* data, int size) {
+    auto* bytes = static_cast<std::vector<std::uint8_t>*>(context);
+    bytes->insert(bytes->end(), static_cast<std::uint8_t*>(data), static_cast<std::uint8_t*>(data) + size);
+  };
+  if (stbi_write_png_to_func(append, &png, image.width, image.height, 3, image.pixels.data(), image.width * 3) == 0)
+    throw file_error(path, "PNG encoding failed");
+  write_file_atomically(path, [&png](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  });
+}
+
+void write_mesh_picture(const std::string& path, const TriangleMesh& mesh, const MeshPictureOptions& options) {
+  write_rgb_png(path, render_mesh(mesh, options));
+}
+
+}  // namespace quadrix

@@ -1,0 +1,253 @@
+// report.json, merged.ply and bev.png of a registration (see registration_report.h).
+#include "experiments/reports/registration_report.h"
+
+#include "experiments/reports/model_picture.h"
+
+#include "geometry/error.h"
+#include "geometry/io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <ostream>
+#include <vector>
+
+namespace quadrix {
+namespace {
+
+nlohmann::json matrix_json(const Eigen::Isometry3d& transform) {
+  nlohmann::json rows = nlohmann::json::array();
+  const Eigen::Matrix4d matrix = transform.matrix();
+  for (int r = 0; r < 4; ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int c = 0; c < 4; ++c) row.push_back(matrix(r, c));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// JSON has no infinity: unscored candidates get null.
+nlohmann::json number_or_null(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
+
+// 3x5 pixel glyphs of the digits and 'm' for the scale-bar label (rows top to bottom, 3 bits each).
+const std::array<std::array<std::uint8_t, 5>, 11> kGlyphs = {{
+    {7, 5, 5, 5, 7}, {2, 6, 2, 2, 7}, {7, 1, 7, 4, 7}, {7, 1, 7, 1, 7}, {5, 5, 7, 1, 1}, {7, 4, 7, 1, 7},
+    {7, 4, 7, 5, 7}, {7, 1, 1, 1, 1}, {7, 5, 7, 5, 7}, {7, 5, 7, 1, 7}, {0, 0, 7, 7, 5},
+}};
+
+struct Canvas {
+  int size = 0;
+  std::vector<std::uint8_t> pixels;  // RGB
+  void set(int x, int y, std::array<std::uint8_t, 3> color) {
+    if (x < 0 || y < 0 || x >= size || y >= size) return;
+    std::uint8_t* pixel = &pixels[3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(size) + static_cast<std::size_t>(x))];
+    pixel[0] = color[0];
+    pixel[1] = color[1];
+    pixel[2] = color[2];
+  }
+  void fill(int x0, int y0, int x1, int y1, std::array<std::uint8_t, 3> color) {
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) set(x, y, color);
+  }
+  // Draws `text` (digits and 'm') with glyph pixels of `scale` image pixels; returns the end x.
+  int text(int x, int y, const std::string& text, int scale, std::array<std::uint8_t, 3> color) {
+    for (const char c : text) {
+      const int glyph = c == 'm' ? 10 : (c >= '0' && c <= '9' ? c - '0' : -1);
+      if (glyph >= 0)
+        for (int row = 0; row < 5; ++row)
+          for (int column = 0; column < 3; ++column)
+            if (kGlyphs[static_cast<std::size_t>(glyph)][static_cast<std::size_t>(row)] & (4 >> column))
+              fill(x + column * scale, y + row * scale, x + (column + 1) * scale - 1, y + (row + 1) * scale - 1, color);
+      x += 4 * scale;
+    }
+    return x;
+  }
+};
+
+}  // namespace
+
+std::string registration_report_json(const RegistrationResult& result, const RegistrationReportContext& context) {
+  nlohmann::json report;
+  report["transform"] = matrix_json(result.transform);
+  report["status"] = registration_status_name(result.status);
+  report["message"] = result.message;
+  nlohmann::json timings;
+  timings["total"] = context.total_ms;
+  timings["load"] = context.load_ms;
+  for (const auto& [stage, ms] : result.timings_ms) timings[stage == "total" ? "registration" : stage] = ms;
+  report["timings_ms"] = timings;
+  const RegistrationCounts& c = result.counts;
+  report["counts"] = {{"source_points", c.source_points},
+                      {"target_points", c.target_points},
+                      {"source_elements", c.source_elements},
+                      {"target_elements", c.target_elements},
+                      {"source_quadrics", c.source_quadrics},
+                      {"target_quadrics", c.target_quadrics},
+                      {"source_augmented_points", c.source_augmented_points},
+                      {"target_augmented_points", c.target_augmented_points},
+                      {"correspondences", c.correspondences},
+                      {"quadric_correspondences", c.quadric_correspondences},
+                      {"augmented_correspondences", c.augmented_correspondences},
+                      {"clique_sizes", c.clique_sizes}};
+  nlohmann::json candidates = nlohmann::json::array();
+  for (std::size_t i = 0; i < result.candidates.size(); ++i) {
+    const RegistrationCandidate& candidate = result.candidates[i];
+    const bool selected = (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) &&
+                          i == result.best_candidate;
+    candidates.push_back({{"level", candidate.level},
+                          {"threshold_m", candidate.threshold},
+                          {"clique_size", candidate.clique_size},
+                          {"refinement_status", candidate.refinement_status},
+                          {"valid", candidate.valid},
+                          {"selected", selected},
+                          {"score", number_or_null(candidate.score.score)},
+                          {"pair_count", candidate.score.pair_count},
+                          {"filtered_count", candidate.score.filtered_count},
+                          {"term_count", candidate.score.term_count},
+                          {"factor_count", candidate.factor_count},
+                          {"refinement_filtered_count", candidate.filtered_count},
+                          {"refinement_cost", number_or_null(candidate.refinement_cost)},
+                          {"transform", matrix_json(candidate.transform)},
+                          {"note", candidate.note}});
+  }
+  report["candidates"] = candidates;
+  report["best_to_second_ratio"] = number_or_null(result.best_to_second_ratio);
+  report["input"] = {{"source", context.source_path},
+                     {"target", context.target_path},
+                     {"source_preset", context.source_preset},
+                     {"target_preset", context.target_preset},
+                     {"preset_notes", context.preset_notes}};
+  if (context.overlap)
+    report["overlap"] = {{"distance_m", context.overlap->distance},
+                         {"transformed", context.overlap->transformed},
+                         {"identity", context.overlap->identity},
+                         {"sampled_points", context.overlap->sampled}};
+  if (result.dense_search) {
+    const DenseSearchResult& search = *result.dense_search;
+    nlohmann::json optima = nlohmann::json::array();
+    for (const DenseOptimum& optimum : search.optima)
+      optima.push_back({{"start", optimum.start},
+                        {"overlap", optimum.overlap},
+                        {"median_residual_m", optimum.median_residual},
+                        {"refined", optimum.refined},
+                        {"transform", matrix_json(optimum.transform)}});
+    report["dense_search"] = {{"weakest_direction", {search.weakest_direction.x(), search.weakest_direction.y(), search.weakest_direction.z()}},
+                              {"weakest_share", search.weakest_share},
+                              {"best", search.best},
+                              {"rival", search.rival ? nlohmann::json(*search.rival) : nlohmann::json(nullptr)},
+                              {"margin", search.margin},
+                              {"unrefined_contenders", search.unrefined_contenders},
+                              {"best_in_grid", search.best_in_grid},
+                              {"source_points", search.source_points},
+                              {"target_points", search.target_points},
+                              {"optima", optima}};
+  }
+  if (context.ground_truth) {
+    report["ground_truth"] = {{"transform", matrix_json(*context.ground_truth)},
+                              {"rte_m", translation_error(result.transform, *context.ground_truth)},
+                              {"rre_deg", rotation_error_degrees(result.transform, *context.ground_truth)},
+                              {"success", registration_succeeded(result.transform, *context.ground_truth)}};
+  }
+  return report.dump(2) + "\n";
+}
+
+void write_registration_report(const std::string& path, const RegistrationResult& result,
+                               const RegistrationReportContext& context) {
+  const std::string text = registration_report_json(result, context);
+  write_file_atomically(path, [&text](std::ostream& out) { out << text; });
+}
+
+PointCloud merge_aligned_clouds(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform) {
+  PointCloud merged;
+  const Eigen::Index target_count = static_cast<Eigen::Index>(target.size());
+  const Eigen::Index source_count = static_cast<Eigen::Index>(source.size());
+  merged.positions.resize(3, target_count + source_count);
+  merged.positions.leftCols(target_count) = target.positions;
+  merged.positions.rightCols(source_count) = (transform * source.positions.cast<double>()).cast<float>();
+  merged.colors.assign(target.size(), {160, 160, 160});
+  merged.colors.resize(target.size() + source.size(), {255, 120, 0});
+  merged.labels.assign(target.size(), 0);
+  merged.labels.resize(target.size() + source.size(), 1);
+  return merged;
+}
+
+BirdsEyeFrame birds_eye_frame(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,
+                              const BirdsEyeOptions& options) {
+  BirdsEyeFrame frame;
+  if (options.half_extent > 0.0) {
+    frame.half_extent = options.half_extent;
+    return frame;
+  }
+  // At most ~100k points of each cloud decide the frame (percentiles are stable well before that).
+  std::vector<double> xs, ys;
+  const auto collect = [&](const PointCloud& cloud, const Eigen::Isometry3d& pose) {
+    const std::size_t stride = std::max<std::size_t>(1, cloud.size() / 100000);
+    for (std::size_t i = 0; i < cloud.size(); i += stride) {
+      const Eigen::Vector3d p = pose * cloud.point(i);
+      if (!p.allFinite()) continue;
+      xs.push_back(p.x());
+      ys.push_back(p.y());
+    }
+  };
+  collect(target, Eigen::Isometry3d::Identity());
+  collect(source, transform);
+  if (xs.empty()) return frame;
+  const auto percentile = [](std::vector<double>& values, double fraction) {
+    const std::size_t k = std::min(values.size() - 1, static_cast<std::size_t>(fraction * static_cast<double>(values.size())));
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+    return values[k];
+  };
+  const Eigen::Vector2d low(percentile(xs, 0.02), percentile(ys, 0.02));
+  const Eigen::Vector2d high(percentile(xs, 0.98), percentile(ys, 0.98));
+  frame.centre = 0.5 * (low + high);
+  frame.half_extent = std::clamp(0.55 * (high - low).maxCoeff(), 5.0, 200.0);  // scale bar >= 2 m: whole metres
+  return frame;
+}
+
+void write_birds_eye_png(const std::string& path, const PointCloud& source, const PointCloud& target,
+                         const Eigen::Isometry3d& transform, const BirdsEyeOptions& options) {
+  if (options.image_size < 64 || options.image_size > 16384)
+    throw Error("write_birds_eye_png: image_size must be within 64..16384 pixels, got " + std::to_string(options.image_size));
+  const BirdsEyeFrame frame = birds_eye_frame(source, target, transform, options);
+  const double half_extent = frame.half_extent;
+  Canvas canvas;
+  canvas.size = options.image_size;
+  canvas.pixels.assign(3 * static_cast<std::size_t>(canvas.size) * static_cast<std::size_t>(canvas.size), 255);
+  const double pixels_per_metre = canvas.size / (2.0 * half_extent);
+  const auto plot = [&](const Eigen::Vector3d& p, std::array<std::uint8_t, 3> color) {
+    if (options.max_height > 0.0 && p.z() > options.max_height) return;
+    canvas.set(static_cast<int>(std::floor((p.x() - frame.centre.x() + half_extent) * pixels_per_metre)),
+               static_cast<int>(std::floor((half_extent - p.y() + frame.centre.y()) * pixels_per_metre)), color);
+  };
+  for (std::size_t i = 0; i < target.size(); ++i) plot(target.point(i), {150, 150, 150});
+  for (std::size_t i = 0; i < source.size(); ++i) plot(transform * source.point(i), {235, 100, 0});
+  // Target origin cross (may lie outside the framed scene).
+  const int origin_x = static_cast<int>(std::floor((half_extent - frame.centre.x()) * pixels_per_metre));
+  const int origin_y = static_cast<int>(std::floor((half_extent + frame.centre.y()) * pixels_per_metre));
+  canvas.fill(origin_x - 6, origin_y - 1, origin_x + 6, origin_y + 1, {0, 0, 200});
+  canvas.fill(origin_x - 1, origin_y - 6, origin_x + 1, origin_y + 6, {0, 0, 200});
+  // Scale bar: the largest of 1/2/5 x 10^k metres not longer than a fifth of the image.
+  const double longest = 0.2 * 2.0 * half_extent;
+  double bar = std::pow(10.0, std::floor(std::log10(longest)));
+  for (const double factor : {5.0, 2.0})
+    if (bar * factor <= longest) {
+      bar *= factor;
+      break;
+    }
+  const int bar_pixels = static_cast<int>(std::lround(bar * pixels_per_metre));
+  const int margin = canvas.size / 32;
+  const int thickness = std::max(3, canvas.size / 256);
+  const int base = canvas.size - margin;
+  canvas.fill(margin, base - thickness, margin + bar_pixels, base, {0, 0, 0});
+  canvas.fill(margin, base - 4 * thickness, margin + thickness - 1, base, {0, 0, 0});
+  canvas.fill(margin + bar_pixels - thickness + 1, base - 4 * thickness, margin + bar_pixels, base, {0, 0, 0});
+  const int glyph_scale = std::max(2, canvas.size / 256);
+  canvas.text(margin, base - 4 * thickness - 7 * glyph_scale, std::to_string(static_cast<long long>(std::lround(bar))) + "m",
+              glyph_scale, {0, 0, 0});
+  write_rgb_png(path, RgbImage{canvas.size, canvas.size, std::move(canvas.pixels)});
+}
+
+}  // namespace quadrix
