@@ -19,17 +19,19 @@ build: configure
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j$(JOBS)
 
-demo: build
-	bash experiments/demo.sh $(BUILD_DIR)
+# The demo needs only the `quadrix` executable: no tests, baselines or micro-benchmarks are compiled.
+demo: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target quadrix
+	bash experiments/command_line/demo.sh $(BUILD_DIR)
 
 clean:
 	rm -rf $(BUILD_DIR)
 
-# Regenerates the committed refiner study (papers/studies/refiners.{md,csv,svg}, issue 7) with its
+# Regenerates the committed refiner study (papers/studies/refiners.{md,csv,svg}) with its
 # fixed seeds; needs ../shared/data for the KITTI part (skipped with a note when absent).
 study-refiners: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target quadrix
-	$(BUILD_DIR)/experiments/quadrix compare-refiners --out papers/studies
+	$(BUILD_DIR)/bin/quadrix compare-refiners --out papers/studies
 
 # Trains the learned fitter (fitting/training/train_learned_fitter.py) on synthetic segments and
 # exports its weights into fitting/models/learned_fitter/. Training only: build and tests never run it.
@@ -55,14 +57,14 @@ PAPER_ABLATIONS = default no-semantics no-central no-linear-center no-planar-cen
   ke30 ke40 ke60 ks15 ks25 dm-0.2 dm-0.8 dm-0.2-0.8 dm-0.2-0.6-0.8 dm-0.2-0.4-0.6-0.8-1.0 \
   no-er no-et no-augmented-factors no-refinement
 papers: build
-	$(BUILD_DIR)/experiments/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --method $(PAPER_METHODS) --jobs $(JOBS) \
+	$(BUILD_DIR)/bin/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --method $(PAPER_METHODS) --jobs $(JOBS) \
 	  --title "Every shared pair, every method" --out $(PAPER_DIR)/results/pairs
-	$(BUILD_DIR)/experiments/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --ids '^kitti00_lc' --method $(PAPER_YAW_METHODS) \
+	$(BUILD_DIR)/bin/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --ids '^kitti00_lc' --method $(PAPER_YAW_METHODS) \
 	  --yaw-range 180 --trials $(PAPER_TRIALS) --seed 1 --jobs $(JOBS) \
 	  --title "KITTI-00 loop closures, random yaw in [-180, 180] deg" --out $(PAPER_DIR)/results/kitti-lc-yaw180
 	for ablation in $(PAPER_ABLATIONS); do \
-	  $(BUILD_DIR)/experiments/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --ids '^kitti00_lc' --method quadrix \
+	  $(BUILD_DIR)/bin/quadrix bench --pairs $(DATA_DIR)/pairs.tsv --ids '^kitti00_lc' --method quadrix \
 	    --yaw-range 180 --trials $(ABLATION_TRIALS) --seed 2 --jobs $(JOBS) --no-progress --ablation $$ablation \
 	    --title "Ablation $$ablation: KITTI-00 loop closures, random yaw" --out $(PAPER_DIR)/results/ablation-$$ablation || exit 1; \
 	done
-	$(BUILD_DIR)/experiments/quadrix paper --results $(PAPER_DIR)/results --tables $(PAPER_DIR)/tables --out $(PAPER_DIR)/README.md
+	$(BUILD_DIR)/bin/quadrix paper --results $(PAPER_DIR)/results --tables $(PAPER_DIR)/tables --out $(PAPER_DIR)/README.md

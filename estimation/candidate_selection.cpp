@@ -39,8 +39,8 @@ TargetCenterIndex index_target_centers(const std::vector<QuadricRecord>& target)
 // SNN of Algorithm 1 against a prepared target index: the greedy one-to-one assignment by
 // increasing (distance, source, target) over all same-label pairs, computed lazily with a heap
 // holding each unmatched source's nearest not-yet-taken target (a k-d tree query that skips taken
-// targets). Equal to sorting every same-label pair and taking them greedily (the quadratic form
-// this replaced: seconds and hundreds of MB with thousands of augmented points per label).
+// targets). Equal to sorting every same-label pair and taking them greedily, without that
+// quadratic pair list (seconds and hundreds of MB with thousands of augmented points per label).
 std::vector<RecordCorrespondence> nearest_pairs(const std::vector<QuadricRecord>& source,
                                                 const std::vector<QuadricRecord>& target,
                                                 const TargetCenterIndex& target_index,

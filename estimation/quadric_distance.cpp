@@ -1,6 +1,7 @@
 // Quadric distance, its Jacobian, factor construction (f_pp, Augment, ground) and robust kernels.
 #include "estimation/quadric_distance.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <Eigen/Eigenvalues>
@@ -11,12 +12,6 @@
 
 namespace quadrix {
 namespace {
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
 
 bool all_finite(const Eigen::Vector3d& v) { return v.allFinite(); }
 
@@ -122,7 +117,7 @@ bool is_manhattan_aligned(const QuadricDecomposition& shape, const Eigen::Vector
     throw Error("is_manhattan_aligned: ground normal must be finite and non-zero");
   if (!(tolerance_degrees >= 0.0)) throw Error("is_manhattan_aligned: tolerance_degrees must be >= 0");
   const Eigen::Vector3d normal = ground_normal.normalized();
-  constexpr double kDegreesPerRadian = 180.0 / M_PI;
+  constexpr double kDegreesPerRadian = 180.0 / kPi;
   for (int i = 0; i < 3; ++i) {
     if (shape.indicators.rotation[i] == 0.0) continue;
     const Eigen::Vector3d axis = shape.rotation.col(i).normalized();

@@ -169,6 +169,13 @@ const char* robust_loss_name(RobustLoss loss);
 /// Parses a kernel name; throws quadrix::Error naming the text otherwise.
 RobustLoss robust_loss_from_name(const std::string& name);
 
+/// Cross-product (skew-symmetric) matrix [v]_x, so that [v]_x w = v x w.
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
 /// The pose update T [+] delta = (R Exp(phi), t + R rho) used by every refiner.
 Eigen::Isometry3d apply_increment(const Eigen::Isometry3d& transform, const Vector6d& increment);
 

@@ -23,12 +23,6 @@
 namespace quadrix {
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
-
 Eigen::Isometry3d pose_from_parameters(const double* x) {
   const Eigen::Map<const Eigen::Quaterniond> rotation(x);
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();

@@ -15,6 +15,7 @@
 // NLOPT_ROUNDOFF_LIMITED (no further progress possible in floating point) counts as converged.
 #include "estimation/refiner.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <nlopt.h>
@@ -27,12 +28,6 @@
 
 namespace quadrix {
 namespace {
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
 
 // Right Jacobian of SO(3): Exp(phi + d) ~ Exp(phi) Exp(Jr(phi) d).
 Eigen::Matrix3d right_jacobian_so3(const Eigen::Vector3d& phi) {
@@ -130,8 +125,8 @@ class NloptRefiner final : public Refiner {
     const std::unique_ptr<nlopt_opt_s, decltype(&nlopt_destroy)> optimizer(nlopt_create(nlopt_code, 6), &nlopt_destroy);
     if (!optimizer) throw Error("nlopt refiner: nlopt_create failed for algorithm '" + algorithm + "'");
     constexpr double kTranslationBound = 1e4;
-    const double lower[6] = {-M_PI, -M_PI, -M_PI, -kTranslationBound, -kTranslationBound, -kTranslationBound};
-    const double upper[6] = {M_PI, M_PI, M_PI, kTranslationBound, kTranslationBound, kTranslationBound};
+    const double lower[6] = {-kPi, -kPi, -kPi, -kTranslationBound, -kTranslationBound, -kTranslationBound};
+    const double upper[6] = {kPi, kPi, kPi, kTranslationBound, kTranslationBound, kTranslationBound};
     const double steps[6] = {options.initial_rotation_step, options.initial_rotation_step, options.initial_rotation_step,
                              options.initial_translation_step, options.initial_translation_step,
                              options.initial_translation_step};

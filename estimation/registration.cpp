@@ -11,6 +11,7 @@
 #include <limits>
 #include <new>
 #include <sstream>
+#include <type_traits>
 
 namespace quadrix {
 namespace {
@@ -84,138 +85,194 @@ bool registration_succeeded(const Eigen::Isometry3d& estimate, const Eigen::Isom
          rotation_error_degrees(estimate, truth) <= max_rotation_degrees;
 }
 
-RegistrationResult register_models(const SceneModel& source, const SceneModel& target, const RegistrationOptions& options) {
-  const Clock::time_point start = Clock::now();
-  RegistrationResult result;
-  result.source_model = source;
-  result.target_model = target;
-  RegistrationCounts& counts = result.counts;
-  counts.source_quadrics = count_quadrics(source);
-  counts.target_quadrics = count_quadrics(target);
-  counts.source_augmented_points = source.augmented_count();
-  counts.target_augmented_points = target.augmented_count();
-  make_refiner(options.estimation.refiner);  // unknown names are an Error before any work
+RegistrationStatus decide_registration_status(const RegistrationFindings& findings) {
+  if (findings.estimation_failure) return *findings.estimation_failure;
+  const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
+  return sure && !findings.fits_worse_than_identity ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
+}
 
-  // Quadric correspondence initialisation (paper §"Quadric Correspondence Initialization").
-  Clock::time_point stage = Clock::now();
-  const CorrespondenceSet correspondence_set = establish_correspondences(source, target, options.correspondences);
-  result.timings_ms["correspondences"] = elapsed_ms(stage);
-  counts.correspondences = correspondence_set.correspondences.size();
-  counts.quadric_correspondences = correspondence_set.quadric_matches;
-  counts.augmented_correspondences = correspondence_set.augmented_matches;
+namespace {
 
-  const auto finish = [&](RegistrationStatus status, const std::string& message) {
-    result.status = status;
-    result.message = message;
-    if (status != RegistrationStatus::Ok && status != RegistrationStatus::Ambiguous)
-      result.transform = Eigen::Isometry3d::Identity();
-    result.timings_ms["total"] = elapsed_ms(start);
-    return result;
-  };
-  for (const char* name : {"graphs", "cliques", "estimation", "selection"}) result.timings_ms[name] = 0.0;
-  if (correspondence_set.correspondences.size() < options.estimation.minimum_inliers) {
-    std::ostringstream message;
-    message << "only " << correspondence_set.correspondences.size() << " putative correspondences (" << count_quadrics(source)
-            << " source and " << count_quadrics(target) << " target quadrics, " << correspondence_set.shared_classes
-            << " shared classes); at least " << options.estimation.minimum_inliers << " are needed";
-    return finish(RegistrationStatus::Degenerate, message.str());
+// Records `findings` and the status they decide; an answer that is neither ok nor ambiguous is the identity.
+void decide(RegistrationResult& result) {
+  result.status = decide_registration_status(result.findings);
+  if (result.status != RegistrationStatus::Ok && result.status != RegistrationStatus::Ambiguous)
+    result.transform = Eigen::Isometry3d::Identity();
+}
+
+// Ends estimation without an answer: `failure` (Degenerate or Failed) with its reason.
+RegistrationResult& fail_estimation(RegistrationResult& result, RegistrationStatus failure, const std::string& message) {
+  result.findings.estimation_failure = failure;
+  result.message = message;
+  decide(result);
+  return result;
+}
+
+// The clique's correspondences as record pairs.
+std::vector<RecordCorrespondence> clique_pairs(const CorrespondenceSet& correspondence_set, const std::vector<int>& clique) {
+  std::vector<RecordCorrespondence> pairs;
+  pairs.reserve(clique.size());
+  for (const int vertex : clique) {
+    const Correspondence& match = correspondence_set.correspondences[static_cast<std::size_t>(vertex)];
+    pairs.push_back(RecordCorrespondence{match.source, match.target});
   }
+  return pairs;
+}
 
-  // Multi-level compatibility graphs (paper Eq. of d_ij) and the graduated maximum cliques.
-  stage = Clock::now();
-  const CompatibilityGraphs graphs = build_compatibility_graphs(correspondence_set.source_centers(source),
-                                                                correspondence_set.target_centers(target), options.graphs);
-  result.timings_ms["graphs"] = elapsed_ms(stage);
-  stage = Clock::now();
-  MaxCliqueOptions clique_options;
-  clique_options.thread_count = options.clique_threads;
-  clique_options.deadline = stage + std::chrono::microseconds(static_cast<long long>(options.clique_time_limit_ms * 1000.0));
-  const GraduatedCliqueResult cliques = find_graduated_maximum_cliques(graphs.levels, clique_options);
-  result.timings_ms["cliques"] = elapsed_ms(stage);
-  for (const MaxCliqueResult& level : cliques.levels) counts.clique_sizes.push_back(level.size());
+// What candidate estimation of every level shares.
+struct CandidateContext {
+  const SceneModel* source = nullptr;
+  const SceneModel* target = nullptr;
+  std::vector<QuadricDecomposition> source_shapes;
+  std::vector<QuadricDecomposition> target_shapes;
+  FactorBuildOptions factor_options;
+  RefinerOptions refiner_options;
+  std::unique_ptr<Refiner> refiner;
+  const EstimationOptions* options = nullptr;
+};
 
-  // Algorithm 1, transformation candidate estimation: one candidate per level.
-  stage = Clock::now();
-  const std::vector<QuadricDecomposition> source_shapes = decompose_records(source.records);
-  const std::vector<QuadricDecomposition> target_shapes = decompose_records(target.records);
-  const FactorBuildOptions factor_options = estimation_factor_options(source, target, options.estimation);
-  RefinerOptions refiner_options = options.estimation.refinement;
+// Algorithm 1 for one clique: T^0 = SVD(R_x, R_y, I*) (Eq. of the full-centre alignment), then the
+// refinement of the quadric distance (Eq. quadrics distance) with f_pp and Augment().
+void estimate_candidate(const CandidateContext& context, const std::vector<RecordCorrespondence>& pairs,
+                        RegistrationCandidate& candidate) {
+  const RigidAlignment initial = align_full_centers(context.source->records, context.target->records, pairs);
+  candidate.initial = initial.transform;
+  if (initial.status != AlignmentStatus::Ok) {
+    candidate.refinement_status = "skipped";
+    candidate.note = "SVD initialisation degenerate: " + initial.message;
+    return;
+  }
+  const FactorSet factors = build_quadric_factors(context.source->records, context.source_shapes, context.target->records,
+                                                  context.target_shapes, pairs, context.factor_options);
+  candidate.factor_count = factors.factors.size();
+  candidate.filtered_count = factors.filtered_count;
+  if (!context.options->refine) {  // ablation: the SVD estimate is the candidate
+    candidate.transform = initial.transform;
+    candidate.refinement_status = "skipped";
+    candidate.valid = true;
+    candidate.note = "refinement disabled (estimation.refine = false)";
+    return;
+  }
+  const RefinementResult refined = context.refiner->refine(factors.factors, initial.transform, context.refiner_options);
+  candidate.refinement_status = refinement_status_name(refined.status);
+  candidate.refinement_cost = refined.final_cost;
+  candidate.transform = refined.transform;
+  switch (refined.status) {
+    case RefinementStatus::Converged:
+    case RefinementStatus::MaxIterations:
+      candidate.valid = true;
+      break;
+    case RefinementStatus::Failed:
+      // The backend could not run; the SVD estimate is still a candidate (scored like the others).
+      candidate.transform = initial.transform;
+      candidate.valid = true;
+      candidate.note = "refinement failed, SVD estimate kept: " + refined.message;
+      break;
+    case RefinementStatus::Degenerate:
+      candidate.note = "refinement degenerate (rank " + std::to_string(refined.constrained_rank) + " of 6): " + refined.message;
+      break;
+  }
+}
+
+// Algorithm 1, transformation candidate estimation: one candidate per clique level.
+std::vector<RegistrationCandidate> estimate_candidates(const SceneModel& source, const SceneModel& target,
+                                                       const CorrespondenceSet& correspondence_set,
+                                                       const CompatibilityGraphs& graphs,
+                                                       const GraduatedCliqueResult& cliques,
+                                                       const EstimationOptions& options) {
+  CandidateContext context;
+  context.source = &source;
+  context.target = &target;
+  context.source_shapes = decompose_records(source.records);
+  context.target_shapes = decompose_records(target.records);
+  context.factor_options = estimation_factor_options(source, target, options);
+  context.refiner_options = options.refinement;
   // Without e_R or e_t some directions may be unconstrained by design: optimise what is left and keep
   // the SVD start along the rest (the paper's ablation rows), instead of refusing as degenerate.
-  if (!options.estimation.use_rotation_error || !options.estimation.use_translation_error) refiner_options.check_degeneracy = false;
-  const std::unique_ptr<Refiner> refiner = make_refiner(options.estimation.refiner);
+  if (!options.use_rotation_error || !options.use_translation_error) context.refiner_options.check_degeneracy = false;
+  context.refiner = make_refiner(options.refiner);
+  context.options = &options;
+
+  std::vector<RegistrationCandidate> candidates;
   for (std::size_t level = 0; level < cliques.levels.size(); ++level) {
     const std::vector<int>& clique = cliques.levels[level].clique;
-    RegistrationCandidate candidate;
+    // A level whose clique equals the previous level's gives the same candidate: reuse it.
+    RegistrationCandidate candidate =
+        level > 0 && clique == cliques.levels[level - 1].clique ? candidates.back() : RegistrationCandidate{};
+    const bool reused = level > 0 && clique == cliques.levels[level - 1].clique;
     candidate.level = level;
     candidate.threshold = graphs.thresholds[level];
     candidate.clique_size = clique.size();
-    // A level whose clique equals the previous level's gives the same candidate: reuse it.
-    if (level > 0 && clique == cliques.levels[level - 1].clique) {
-      candidate = result.candidates.back();
-      candidate.level = level;
-      candidate.threshold = graphs.thresholds[level];
-      result.candidates.push_back(candidate);
-      continue;
+    if (!reused) {
+      if (clique.size() < options.minimum_inliers) {
+        candidate.refinement_status = "skipped";
+        candidate.note = "clique of " + std::to_string(clique.size()) + " correspondences (< " +
+                         std::to_string(options.minimum_inliers) + ")";
+      } else {
+        estimate_candidate(context, clique_pairs(correspondence_set, clique), candidate);
+      }
     }
-    if (clique.size() < options.estimation.minimum_inliers) {
-      candidate.refinement_status = "skipped";
-      candidate.note = "clique of " + std::to_string(clique.size()) + " correspondences (< " +
-                       std::to_string(options.estimation.minimum_inliers) + ")";
-      result.candidates.push_back(candidate);
-      continue;
-    }
-    std::vector<RecordCorrespondence> pairs;
-    pairs.reserve(clique.size());
-    for (const int vertex : clique) {
-      const Correspondence& match = correspondence_set.correspondences[static_cast<std::size_t>(vertex)];
-      pairs.push_back(RecordCorrespondence{match.source, match.target});
-    }
-    const RigidAlignment initial = align_full_centers(source.records, target.records, pairs);  // T^0 = SVD(R_x, R_y, I*)
-    candidate.initial = initial.transform;
-    if (initial.status != AlignmentStatus::Ok) {
-      candidate.refinement_status = "skipped";
-      candidate.note = "SVD initialisation degenerate: " + initial.message;
-      result.candidates.push_back(candidate);
-      continue;
-    }
-    const FactorSet factors = build_quadric_factors(source.records, source_shapes, target.records, target_shapes, pairs,
-                                                    factor_options);
-    candidate.factor_count = factors.factors.size();
-    candidate.filtered_count = factors.filtered_count;
-    if (!options.estimation.refine) {  // ablation: the SVD estimate is the candidate
-      candidate.transform = initial.transform;
-      candidate.refinement_status = "skipped";
-      candidate.valid = true;
-      candidate.note = "refinement disabled (estimation.refine = false)";
-      result.candidates.push_back(candidate);
-      continue;
-    }
-    const RefinementResult refined = refiner->refine(factors.factors, initial.transform, refiner_options);
-    candidate.refinement_status = refinement_status_name(refined.status);
-    candidate.refinement_cost = refined.final_cost;
-    candidate.transform = refined.transform;
-    switch (refined.status) {
-      case RefinementStatus::Converged:
-      case RefinementStatus::MaxIterations:
-        candidate.valid = true;
-        break;
-      case RefinementStatus::Failed:
-        // The backend could not run; the SVD estimate is still a candidate (scored like the others).
-        candidate.transform = initial.transform;
-        candidate.valid = true;
-        candidate.note = "refinement failed, SVD estimate kept: " + refined.message;
-        break;
-      case RefinementStatus::Degenerate:
-        candidate.note = "refinement degenerate (rank " + std::to_string(refined.constrained_rank) + " of 6): " + refined.message;
-        break;
-    }
-    result.candidates.push_back(candidate);
+    candidates.push_back(candidate);
   }
-  result.timings_ms["estimation"] = elapsed_ms(stage);
+  return candidates;
+}
 
-  // Algorithm 1, optimal transformation selection among the valid candidates.
-  stage = Clock::now();
+// The reason no candidate is usable: the largest clique and every distinct candidate note.
+std::string describe_no_usable_candidate(const RegistrationResult& result) {
+  const std::vector<std::size_t>& sizes = result.counts.clique_sizes;
+  const std::size_t largest = sizes.empty() ? 0 : *std::max_element(sizes.begin(), sizes.end());
+  std::string notes;
+  for (const RegistrationCandidate& candidate : result.candidates)
+    if (!candidate.note.empty() && notes.find(candidate.note) == std::string::npos)
+      notes += (notes.empty() ? "" : "; ") + candidate.note;
+  return "no usable candidate (largest clique " + std::to_string(largest) + " of " +
+         std::to_string(result.counts.correspondences) + " correspondences): " + notes;
+}
+
+// Ambiguity of the selected winner (findings.scores_close, findings.weak_support) and the summary message.
+void judge_winner(RegistrationResult& result, const std::vector<std::size_t>& valid_indices, const AmbiguityOptions& options) {
+  const RegistrationCandidate& best = result.candidates[result.best_candidate];
+  // The best distinct rival: a candidate that disagrees with the winner, scoring nearly as well.
+  double best_rival_score = std::numeric_limits<double>::infinity();
+  std::size_t rival = result.best_candidate;
+  double second_score = std::numeric_limits<double>::infinity();
+  for (const std::size_t index : valid_indices) {
+    if (index == result.best_candidate) continue;
+    const RegistrationCandidate& other = result.candidates[index];
+    if (!std::isfinite(other.score.score)) continue;
+    second_score = std::min(second_score, other.score.score);
+    const bool disagrees = translation_error(other.transform, best.transform) > options.translation_disagreement ||
+                           rotation_error_degrees(other.transform, best.transform) > options.rotation_disagreement_degrees;
+    if (disagrees && other.score.score < best_rival_score) {
+      best_rival_score = other.score.score;
+      rival = index;
+    }
+  }
+  if (std::isfinite(second_score) && second_score > 0.0) result.best_to_second_ratio = best.score.score / second_score;
+  std::ostringstream summary;
+  summary << "candidate of level " << best.level << " (delta_m " << best.threshold << " m, clique " << best.clique_size
+          << ", score " << best.score.score << ")";
+  result.findings.scores_close = std::isfinite(best_rival_score) && best_rival_score > 0.0 &&
+                                 best.score.score / best_rival_score > options.score_ratio;
+  if (result.findings.scores_close) {
+    summary << " nearly ties with level " << result.candidates[rival].level << " (score " << best_rival_score
+            << "), which differs by " << translation_error(result.candidates[rival].transform, best.transform) << " m and "
+            << rotation_error_degrees(result.candidates[rival].transform, best.transform) << " deg";
+  } else if (best.clique_size < options.minimum_clique_for_ok) {
+    // Weak support: all candidates may agree and still rest on a handful of pairs that happen to be
+    // mutually consistent (3 or 4 consistent pairs arise by chance among hundreds). A guess, not `ok`.
+    result.findings.weak_support = true;
+    summary << " rests on only " << best.clique_size << " mutually consistent correspondences (fewer than "
+            << options.minimum_clique_for_ok << ")";
+  }
+  result.message = summary.str();
+}
+
+// Algorithm 1, optimal transformation selection among the valid candidates (D_v with the DCS kernel),
+// then the ambiguity of the winner. Fills the scores, the answer and the findings.
+void select_answer(RegistrationResult& result, const RegistrationOptions& options) {
+  const SceneModel& source = result.source_model;
+  const SceneModel& target = result.target_model;
   std::vector<std::size_t> valid_indices;
   std::vector<Eigen::Isometry3d> valid_transforms;
   for (std::size_t i = 0; i < result.candidates.size(); ++i)
@@ -224,14 +281,8 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
       valid_transforms.push_back(result.candidates[i].transform);
     }
   if (valid_indices.empty()) {
-    result.timings_ms["selection"] = elapsed_ms(stage);
-    const std::size_t largest = counts.clique_sizes.empty() ? 0 : *std::max_element(counts.clique_sizes.begin(), counts.clique_sizes.end());
-    std::string notes;
-    for (const RegistrationCandidate& candidate : result.candidates)
-      if (!candidate.note.empty() && notes.find(candidate.note) == std::string::npos)
-        notes += (notes.empty() ? "" : "; ") + candidate.note;
-    return finish(RegistrationStatus::Degenerate, "no usable candidate (largest clique " + std::to_string(largest) +
-                                                      " of " + std::to_string(counts.correspondences) + " correspondences): " + notes);
+    fail_estimation(result, RegistrationStatus::Degenerate, describe_no_usable_candidate(result));
+    return;
   }
   SelectionOptions selection = options.selection;
   if (selection.structure_labels.empty()) selection.structure_labels = structure_labels();
@@ -244,81 +295,118 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
     selected = select_candidate(source.records, target.records, valid_transforms, selection);
   } catch (const std::bad_alloc&) {
     // SNN enumerates every same-label source/target pair; huge augmented models can exhaust memory.
-    result.timings_ms["selection"] = elapsed_ms(stage);
-    return finish(RegistrationStatus::Failed, "candidate selection ran out of memory (" + std::to_string(source.size()) +
-                                                  " source and " + std::to_string(target.size()) + " target records)");
+    fail_estimation(result, RegistrationStatus::Failed, "candidate selection ran out of memory (" +
+                                                            std::to_string(source.size()) + " source and " +
+                                                            std::to_string(target.size()) + " target records)");
+    return;
   }
-  result.timings_ms["selection"] = elapsed_ms(stage);
   for (std::size_t k = 0; k < valid_indices.size(); ++k) {
     CandidateScore score = selected.scores[k];
     score.index = valid_indices[k];
     result.candidates[valid_indices[k]].score = score;
   }
-  if (selected.status != SelectionStatus::Ok)
-    return finish(RegistrationStatus::Failed, "no candidate could be scored (no shared structure after the transform)");
+  if (selected.status != SelectionStatus::Ok) {
+    fail_estimation(result, RegistrationStatus::Failed, "no candidate could be scored (no shared structure after the transform)");
+    return;
+  }
   result.best_candidate = valid_indices[selected.best_index];
   result.transform = result.candidates[result.best_candidate].transform;
-
-  // Ambiguity: the best distinct rival (a candidate that disagrees with the winner) scoring nearly as well.
-  const RegistrationCandidate& best = result.candidates[result.best_candidate];
-  double best_rival_score = std::numeric_limits<double>::infinity();
-  std::size_t rival = result.best_candidate;
-  double second_score = std::numeric_limits<double>::infinity();
-  for (const std::size_t index : valid_indices) {
-    if (index == result.best_candidate) continue;
-    const RegistrationCandidate& other = result.candidates[index];
-    if (!std::isfinite(other.score.score)) continue;
-    second_score = std::min(second_score, other.score.score);
-    const bool disagrees = translation_error(other.transform, best.transform) > options.ambiguity.translation_disagreement ||
-                           rotation_error_degrees(other.transform, best.transform) > options.ambiguity.rotation_disagreement_degrees;
-    if (disagrees && other.score.score < best_rival_score) {
-      best_rival_score = other.score.score;
-      rival = index;
-    }
-  }
-  if (std::isfinite(second_score) && second_score > 0.0) result.best_to_second_ratio = best.score.score / second_score;
-  std::ostringstream summary;
-  summary << "candidate of level " << best.level << " (delta_m " << best.threshold << " m, clique " << best.clique_size
-          << ", score " << best.score.score << ")";
-  if (std::isfinite(best_rival_score) && best_rival_score > 0.0 &&
-      best.score.score / best_rival_score > options.ambiguity.score_ratio) {
-    summary << " nearly ties with level " << result.candidates[rival].level << " (score " << best_rival_score
-            << "), which differs by " << translation_error(result.candidates[rival].transform, best.transform) << " m and "
-            << rotation_error_degrees(result.candidates[rival].transform, best.transform) << " deg";
-    return finish(RegistrationStatus::Ambiguous, summary.str());
-  }
-  // Weak support: all candidates may agree and still rest on a handful of pairs that happen to be
-  // mutually consistent (3DMatch under an indoor configuration: cliques of 2-3 among 19 pairs,
-  // 170 deg off). Such an answer is a guess, not an `ok`.
-  if (best.clique_size < options.ambiguity.minimum_clique_for_ok) {
-    summary << " rests on only " << best.clique_size << " mutually consistent correspondences (fewer than "
-            << options.ambiguity.minimum_clique_for_ok << ")";
-    return finish(RegistrationStatus::Ambiguous, summary.str());
-  }
-  return finish(RegistrationStatus::Ok, summary.str());
+  judge_winner(result, valid_indices, options.ambiguity);
+  decide(result);
 }
+
+// Runs `stage` and records its wall time under `name`.
+template <typename Stage>
+auto timed(RegistrationResult& result, const char* name, Stage&& stage) {
+  const Clock::time_point start = Clock::now();
+  if constexpr (std::is_void_v<decltype(stage())>) {
+    stage();
+    result.timings_ms[name] += elapsed_ms(start);
+  } else {
+    auto value = stage();
+    result.timings_ms[name] += elapsed_ms(start);
+    return value;
+  }
+}
+
+}  // namespace
+
+RegistrationResult register_models(const SceneModel& source, const SceneModel& target, const RegistrationOptions& options) {
+  RegistrationResult result;
+  result.source_model = source;
+  result.target_model = target;
+  RegistrationCounts& counts = result.counts;
+  counts.source_quadrics = count_quadrics(source);
+  counts.target_quadrics = count_quadrics(target);
+  counts.source_augmented_points = source.augmented_count();
+  counts.target_augmented_points = target.augmented_count();
+  make_refiner(options.estimation.refiner);  // unknown names are an Error before any work
+  for (const char* name : {"correspondences", "graphs", "cliques", "estimation", "selection"}) result.timings_ms[name] = 0.0;
+
+  // Quadric correspondence initialisation (paper §"Quadric Correspondence Initialization").
+  const CorrespondenceSet correspondence_set =
+      timed(result, "correspondences", [&] { return establish_correspondences(source, target, options.correspondences); });
+  counts.correspondences = correspondence_set.correspondences.size();
+  counts.quadric_correspondences = correspondence_set.quadric_matches;
+  counts.augmented_correspondences = correspondence_set.augmented_matches;
+  if (correspondence_set.correspondences.size() < options.estimation.minimum_inliers) {
+    std::ostringstream message;
+    message << "only " << correspondence_set.correspondences.size() << " putative correspondences (" << count_quadrics(source)
+            << " source and " << count_quadrics(target) << " target quadrics, " << correspondence_set.shared_classes
+            << " shared classes); at least " << options.estimation.minimum_inliers << " are needed";
+    return fail_estimation(result, RegistrationStatus::Degenerate, message.str());
+  }
+
+  // Multi-level compatibility graphs (paper Eq. of d_ij) and the graduated maximum cliques.
+  const CompatibilityGraphs graphs = timed(result, "graphs", [&] {
+    return build_compatibility_graphs(correspondence_set.source_centers(source), correspondence_set.target_centers(target),
+                                      options.graphs);
+  });
+  const GraduatedCliqueResult cliques = timed(result, "cliques", [&] {
+    MaxCliqueOptions clique_options;
+    clique_options.thread_count = options.clique_threads;
+    clique_options.deadline =
+        Clock::now() + std::chrono::microseconds(static_cast<long long>(options.clique_time_limit_ms * 1000.0));
+    return find_graduated_maximum_cliques(graphs.levels, clique_options);
+  });
+  for (const MaxCliqueResult& level : cliques.levels) counts.clique_sizes.push_back(level.size());
+
+  result.candidates = timed(result, "estimation", [&] {
+    return estimate_candidates(source, target, correspondence_set, graphs, cliques, options.estimation);
+  });
+  timed(result, "selection", [&] { select_answer(result, options); });
+  return result;
+}
+
+namespace {
+
+// The source model's ground plane (n, d) as the overlap measure takes it, when the model has one.
+std::optional<Eigen::Vector4d> source_ground_of(const RegistrationResult& result) {
+  if (!result.source_model.has_ground) return std::nullopt;
+  const Eigen::Vector3d& normal = result.source_model.ground_normal;
+  return Eigen::Vector4d(normal.x(), normal.y(), normal.z(), result.source_model.ground_offset);
+}
+
+}  // namespace
 
 void check_overlap(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                    const AmbiguityOptions& options) {
-  const Clock::time_point start = Clock::now();
-  std::optional<Eigen::Vector4d> source_ground;
-  if (result.source_model.has_ground)
-    source_ground = Eigen::Vector4d(result.source_model.ground_normal.x(), result.source_model.ground_normal.y(),
-                                    result.source_model.ground_normal.z(), result.source_model.ground_offset);
-  const OverlapMeasure overlap = measure_overlap(source, target, result.transform, source_ground);
-  result.overlap = overlap;
-  if (result.status == RegistrationStatus::Ok && options.overlap_margin >= 0.0 && overlap.sampled > 0 &&
-      overlap.transformed < overlap.identity - options.overlap_margin) {
-    std::ostringstream why;
-    why.precision(2);
-    why << "; but only " << overlap.transformed << " of the source lands within " << overlap.distance
-        << " m of the target, against " << overlap.identity << " left where it is (margin " << options.overlap_margin << ")";
-    result.status = RegistrationStatus::Ambiguous;
-    result.message += why.str();
-  }
-  const double ms = elapsed_ms(start);
-  result.timings_ms["overlap"] += ms;  // verify_registration may measure twice
-  if (const auto total = result.timings_ms.find("total"); total != result.timings_ms.end()) total->second += ms;
+  timed(result, "overlap", [&] {
+    const OverlapMeasure overlap = measure_overlap(source, target, result.transform, source_ground_of(result));
+    result.overlap = overlap;
+    const bool was_ok = result.status == RegistrationStatus::Ok;
+    result.findings.fits_worse_than_identity =
+        options.overlap_margin >= 0.0 && overlap.sampled > 0 && overlap.transformed < overlap.identity - options.overlap_margin;
+    if (was_ok && result.findings.fits_worse_than_identity) {
+      std::ostringstream why;
+      why.precision(2);
+      why << "; but only " << overlap.transformed << " of the source lands within " << overlap.distance
+          << " m of the target, against " << overlap.identity << " left where it is (margin " << options.overlap_margin << ")";
+      result.message += why.str();
+    }
+    // Only an `ok` answer is demoted here; any other status stands as it is.
+    if (was_ok) decide(result);
+  });
 }
 
 namespace {
@@ -335,6 +423,68 @@ PointCloud crop_to_range(const PointCloud& cloud, const ExtractionOptions& extra
   return cropped;
 }
 
+// Whether the dense search's winner may replace the answer: clear of every distinct optimum, all close
+// contenders refined, enough of the source on the target, and inside the grid searched around the
+// answer (outside it, the winner is a local optimum of a grid that missed the truth).
+bool dense_search_settles(const DenseSearchResult& search, const DenseSearchOptions& options) {
+  const DenseOptimum& best = search.optima[search.best];
+  return search.margin >= options.decisive_margin && search.unrefined_contenders == 0 &&
+         best.overlap >= options.minimum_overlap && search.best_in_grid;
+}
+
+// The dense search's account for the message: direction, both optima, margin, and what failed.
+std::string describe_dense_search(const DenseSearchResult& search, const RegistrationResult& result, bool settled,
+                                  const DenseSearchOptions& options) {
+  const DenseOptimum& best = search.optima[search.best];
+  std::ostringstream why;
+  why.precision(3);
+  why << "; dense search along (" << search.weakest_direction.x() << ", " << search.weakest_direction.y() << ", "
+      << search.weakest_direction.z() << "): best from " << best.start << " (overlap " << best.overlap << ", "
+      << translation_error(best.transform, result.transform) << " m from the quadric answer)";
+  if (search.rival) {
+    const DenseOptimum& rival = search.optima[*search.rival];
+    why << ", best distinct optimum from " << rival.start << " at " << translation_error(rival.transform, best.transform)
+        << " m (overlap " << rival.overlap << ")";
+  } else {
+    why << ", every start reached it";
+  }
+  if (settled) {
+    why << ": settled (margin " << search.margin << ")";
+    return why.str();
+  }
+  // Not settled: the points do not single out an optimum either, so the quadric answer stands.
+  why << ": not settled (margin " << search.margin;
+  if (search.margin < options.decisive_margin) why << " < " << options.decisive_margin;
+  if (best.overlap < options.minimum_overlap) why << ", best overlap below " << options.minimum_overlap;
+  if (!search.best_in_grid) why << ", best optimum outside the grid searched around the answer";
+  if (search.unrefined_contenders > 0)
+    why << ", " << search.unrefined_contenders << " optima within " << options.refine_band
+        << " of the best left unrefined beyond max_refined " << options.max_refined;
+  why << "), the quadric answer stands";
+  return why.str();
+}
+
+// Settles an `ambiguous` answer with the dense search along the weakest direction (search_weakest_direction).
+void settle_with_dense_search(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                              const RegistrationOptions& options) {
+  std::vector<Eigen::Isometry3d> other_starts;
+  for (std::size_t i = 0; i < result.candidates.size(); ++i)
+    if (result.candidates[i].valid && i != result.best_candidate) other_starts.push_back(result.candidates[i].transform);
+  std::optional<Eigen::Vector3d> up;
+  if (result.target_model.has_ground) up = result.target_model.ground_normal;
+  const DenseSearchResult search = search_weakest_direction(
+      source, target, result.transform, other_starts, up, source_ground_of(result),
+      options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
+  const bool settled = dense_search_settles(search, options.dense_search);
+  result.message += describe_dense_search(search, result, settled, options.dense_search);
+  result.dense_search = search;
+  result.findings.settled_by_dense_search = settled;
+  if (!settled) return;
+  result.transform = search.optima[search.best].transform;
+  result.findings.fits_worse_than_identity = false;  // measured again on the new answer below
+  decide(result);
+}
+
 }  // namespace
 
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
@@ -344,66 +494,12 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
   // The overlap guard first: an `ok` answer that fits the points worse than not moving becomes
   // `ambiguous`, and the dense search then gets its chance too.
   check_overlap(result, cropped_source, cropped_target, options.ambiguity);
-  if (result.status == RegistrationStatus::Ambiguous && options.dense_search.enabled && !cropped_source.empty() &&
-      !cropped_target.empty()) {
-    const Clock::time_point start = Clock::now();
-    std::vector<Eigen::Isometry3d> other_starts;
-    for (std::size_t i = 0; i < result.candidates.size(); ++i)
-      if (result.candidates[i].valid && i != result.best_candidate) other_starts.push_back(result.candidates[i].transform);
-    std::optional<Eigen::Vector3d> up;
-    if (result.target_model.has_ground) up = result.target_model.ground_normal;
-    std::optional<Eigen::Vector4d> source_ground;
-    if (result.source_model.has_ground)
-      source_ground = Eigen::Vector4d(result.source_model.ground_normal.x(), result.source_model.ground_normal.y(),
-                                      result.source_model.ground_normal.z(), result.source_model.ground_offset);
-    const DenseSearchResult search = search_weakest_direction(
-        cropped_source, cropped_target, result.transform, other_starts, up, source_ground,
-        options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
-    const DenseOptimum& best = search.optima[search.best];
-    std::ostringstream why;
-    why.precision(3);
-    why << "; dense search along (" << search.weakest_direction.x() << ", " << search.weakest_direction.y() << ", "
-        << search.weakest_direction.z() << "): best from " << best.start << " (overlap " << best.overlap << ", "
-        << translation_error(best.transform, result.transform) << " m from the quadric answer)";
-    if (search.rival) {
-      const DenseOptimum& rival = search.optima[*search.rival];
-      why << ", best distinct optimum from " << rival.start << " at " << translation_error(rival.transform, best.transform)
-          << " m (overlap " << rival.overlap << ")";
-    } else {
-      why << ", every start reached it";
-    }
-    // Settled only when the winner is clear of every distinct optimum, all close contenders were
-    // refined, it lands enough of the source on the target, and it lies within the grid searched
-    // around the answer. When the truth is outside the grid, the winner is a wrong local optimum:
-    // KITTI answers 10-15 m off gave winners overlapping 0.23-0.33, and 3DTK answers 10-15 m off
-    // gave the optimum near not moving (0.49-0.56, 1.4-3.4 m and up to 8 deg wrong) a big margin
-    // over the empty grid.
-    const bool settled = search.margin >= options.dense_search.decisive_margin && search.unrefined_contenders == 0 &&
-                         best.overlap >= options.dense_search.minimum_overlap && search.best_in_grid;
-    if (settled) {
-      result.transform = best.transform;
-      result.status = RegistrationStatus::Ok;
-      why << ": settled (margin " << search.margin << ")";
-    } else {
-      // Not settled: the points do not single out an optimum either, so the quadric answer stands.
-      why << ": not settled (margin " << search.margin;
-      if (search.margin < options.dense_search.decisive_margin) why << " < " << options.dense_search.decisive_margin;
-      if (best.overlap < options.dense_search.minimum_overlap)
-        why << ", best overlap below " << options.dense_search.minimum_overlap;
-      if (!search.best_in_grid) why << ", best optimum outside the grid searched around the answer";
-      if (search.unrefined_contenders > 0)
-        why << ", " << search.unrefined_contenders << " optima within " << options.dense_search.refine_band
-            << " of the best left unrefined beyond max_refined " << options.dense_search.max_refined;
-      why << "), the quadric answer stands";
-    }
-    result.message += why.str();
-    result.dense_search = search;
-    const double ms = elapsed_ms(start);
-    result.timings_ms["dense_search"] = ms;
-    if (const auto total = result.timings_ms.find("total"); total != result.timings_ms.end()) total->second += ms;
-    // The new answer's overlap, under the same guard.
-    if (settled) check_overlap(result, cropped_source, cropped_target, options.ambiguity);
-  }
+  if (result.status != RegistrationStatus::Ambiguous || !options.dense_search.enabled || cropped_source.empty() ||
+      cropped_target.empty())
+    return;
+  timed(result, "dense_search", [&] { settle_with_dense_search(result, cropped_source, cropped_target, options); });
+  // The new answer's overlap, under the same guard.
+  if (result.findings.settled_by_dense_search) check_overlap(result, cropped_source, cropped_target, options.ambiguity);
 }
 
 bool lacks_augmentation_of(const SceneModel& model, const SceneModel& other) {
@@ -417,48 +513,65 @@ bool augment_other_side(const PointCloud& cloud, ModellingResult& modelling, con
   return modelling.model.augmented_count() > 0;
 }
 
-RegistrationResult register_clouds(const PointCloud& source, const PointCloud& target, const RegistrationOptions& options,
-                                   const std::vector<std::uint32_t>& source_labels,
-                                   const std::vector<std::uint32_t>& target_labels) {
+RegistrationResult register_modelled_clouds(const ModelledCloud& source, const ModelledCloud& target,
+                                            const RegistrationOptions& options, const ModelAdjustment& adjust_models) {
   const Clock::time_point start = Clock::now();
-  ExtractionOptions source_extraction = options.source_extraction;
-  ExtractionOptions target_extraction = options.target_extraction;
-  if (!source_labels.empty()) source_extraction.semantic_mode = SemanticMode::Labels;
-  if (!target_labels.empty()) target_extraction.semantic_mode = SemanticMode::Labels;
-
-  Clock::time_point stage = Clock::now();
-  ModellingResult source_modelling = model_scene(source, source_extraction, options.modelling, source_labels);
-  double source_ms = elapsed_ms(stage);
-  stage = Clock::now();
-  ModellingResult target_modelling = model_scene(target, target_extraction, options.modelling, target_labels);
-  double target_ms = elapsed_ms(stage);
+  const ModellingResult* source_modelling = source.modelling;
+  const ModellingResult* target_modelling = target.modelling;
+  double source_ms = source.modelling_ms;
+  double target_ms = target.modelling_ms;
   // delta_a is decided per cloud, but augmented points only match augmented points: when one side
-  // fell below delta_a and the other did not, augment the other too.
+  // fell below delta_a and the other did not, augment the other too (on a copy: the caller's model stays).
+  std::optional<ModellingResult> augmented;
   if (options.correspondences.match_augmented_points) {
-    stage = Clock::now();
-    if (augment_other_side(source, source_modelling, target_modelling, options.modelling))
-      source_ms += elapsed_ms(stage);
-    else if (augment_other_side(target, target_modelling, source_modelling, options.modelling))
-      target_ms += elapsed_ms(stage);
+    const auto augment = [&](const ModelledCloud& side, const ModellingResult& other, double& side_ms) {
+      if (!lacks_augmentation_of(side.modelling->model, other.model)) return false;
+      const Clock::time_point stage = Clock::now();
+      augmented = *side.modelling;
+      const bool added = augment_other_side(*side.cloud, *augmented, other, options.modelling);
+      if (added) side_ms += elapsed_ms(stage);
+      else augmented.reset();
+      return added;
+    };
+    if (augment(source, *target.modelling, source_ms)) source_modelling = &*augmented;
+    else if (augment(target, *source.modelling, target_ms)) target_modelling = &*augmented;
   }
 
-  RegistrationResult result = register_models(source_modelling.model, target_modelling.model, options);
-  verify_registration(result, source, target, options);
+  RegistrationResult result =
+      adjust_models ? register_models(adjust_models(source_modelling->model), adjust_models(target_modelling->model), options)
+                    : register_models(source_modelling->model, target_modelling->model, options);
+  verify_registration(result, *source.cloud, *target.cloud, options);
   result.timings_ms["modelling_source"] = source_ms;
   result.timings_ms["modelling_target"] = target_ms;
-  result.timings_ms["total"] = elapsed_ms(start);
-  result.counts.source_points = source.size();
-  result.counts.target_points = target.size();
-  result.counts.source_elements = source_modelling.extraction.elements.size();
-  result.counts.target_elements = target_modelling.extraction.elements.size();
+  result.timings_ms["total"] = source.modelling_ms + target.modelling_ms + elapsed_ms(start);
+  result.counts.source_points = source.cloud->size();
+  result.counts.target_points = target.cloud->size();
+  result.counts.source_elements = source_modelling->extraction.elements.size();
+  result.counts.target_elements = target_modelling->extraction.elements.size();
   if (result.status == RegistrationStatus::Degenerate || result.status == RegistrationStatus::Failed) {
     const auto describe = [](const char* side, const ModellingResult& modelling) {
       return std::string(side) + " " + extraction_status_name(modelling.extraction.status) +
              (modelling.message.empty() ? "" : " (" + modelling.message + ")");
     };
-    result.message += " [modelling: " + describe("source", source_modelling) + ", " + describe("target", target_modelling) + "]";
+    result.message += " [modelling: " + describe("source", *source_modelling) + ", " + describe("target", *target_modelling) + "]";
   }
   return result;
+}
+
+RegistrationResult register_clouds(const PointCloud& source, const PointCloud& target, const RegistrationOptions& options,
+                                   const std::vector<std::uint32_t>& source_labels,
+                                   const std::vector<std::uint32_t>& target_labels) {
+  ExtractionOptions source_extraction = options.source_extraction;
+  ExtractionOptions target_extraction = options.target_extraction;
+  if (!source_labels.empty()) source_extraction.semantic_mode = SemanticMode::Labels;
+  if (!target_labels.empty()) target_extraction.semantic_mode = SemanticMode::Labels;
+  Clock::time_point start = Clock::now();
+  const ModellingResult source_modelling = model_scene(source, source_extraction, options.modelling, source_labels);
+  const double source_ms = elapsed_ms(start);
+  start = Clock::now();
+  const ModellingResult target_modelling = model_scene(target, target_extraction, options.modelling, target_labels);
+  const double target_ms = elapsed_ms(start);
+  return register_modelled_clouds({&source, &source_modelling, source_ms}, {&target, &target_modelling, target_ms}, options);
 }
 
 }  // namespace quadrix

@@ -27,6 +27,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -115,17 +116,34 @@ struct RegistrationCounts {
   std::vector<std::size_t> clique_sizes;      ///< |I*_k| per level
 };
 
+/// What the stages found that bears on the status. decide_registration_status turns it into the
+/// status; no stage sets a status of its own.
+struct RegistrationFindings {
+  std::optional<RegistrationStatus> estimation_failure;  ///< Degenerate or Failed when estimation produced no answer
+  bool scores_close = false;              ///< the winner nearly ties a disagreeing candidate (AmbiguityOptions::score_ratio)
+  bool weak_support = false;              ///< the winner's clique is smaller than AmbiguityOptions::minimum_clique_for_ok
+  bool fits_worse_than_identity = false;  ///< the answer's overlap is below the unmoved source's by more than overlap_margin
+  bool settled_by_dense_search = false;   ///< the dense search replaced an unsure answer by a clear winner
+};
+
+/// The status of a registration from its findings, the one place a status is decided: the estimation
+/// failure when there is one; otherwise `ok` when the answer is sure (no close rival and enough support,
+/// or settled by the dense search) and fits the points at least as well as not moving; else `ambiguous`.
+RegistrationStatus decide_registration_status(const RegistrationFindings& findings);
+
 /// Everything register_clouds returns.
 struct RegistrationResult {
   Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< T*: maps source points into the target frame (identity unless ok/ambiguous)
-  RegistrationStatus status = RegistrationStatus::Failed;       ///< see RegistrationStatus
+  RegistrationStatus status = RegistrationStatus::Failed;       ///< see RegistrationStatus; decide_registration_status(findings)
+  RegistrationFindings findings;                                ///< what the stages found, behind `status`
   std::string message;                                          ///< why, for any status but ok; a short summary otherwise
   std::size_t best_candidate = 0;                               ///< index of T* in `candidates`
   std::vector<RegistrationCandidate> candidates;                ///< every candidate with its score, in level order
   double best_to_second_ratio = 0.0;                            ///< D_v(best) / D_v(second best valid); 0 with fewer than 2
   RegistrationCounts counts;                                    ///< counts of every stage
   /// Wall times in ms: "modelling_source", "modelling_target", "correspondences", "graphs", "cliques",
-  /// "estimation", "selection", and "total" (this call, modelling included).
+  /// "estimation", "selection", "overlap", "dense_search" (when it ran), and "total" (written once, by
+  /// register_modelled_clouds: both modellings plus everything after them).
   std::map<std::string, double> timings_ms;
   SceneModel source_model;                                      ///< R_x
   SceneModel target_model;                                      ///< R_y
@@ -141,7 +159,7 @@ FactorBuildOptions estimation_factor_options(const SceneModel& source, const Sce
 
 /// Registers two already-modelled scenes (everything after modelling: correspondences, graphs,
 /// cliques, Algorithm 1). `counts` source/target points and elements are left 0; timings have no
-/// modelling entries. The models are copied into the result.
+/// modelling entries and no "total". The models are copied into the result.
 RegistrationResult register_models(const SceneModel& source, const SceneModel& target,
                                    const RegistrationOptions& options = {});
 
@@ -155,19 +173,37 @@ bool augment_other_side(const PointCloud& cloud, ModellingResult& modelling, con
                         const ModellingOptions& options);
 
 /// Registers `source` onto `target` (paper Fig. overview): model_scene on both clouds with their
-/// extraction options, the other side augmented when only one side was (augment_other_side), then
-/// register_models. Optional per-point SemanticKITTI labels switch that
-/// side to the labels semantic mode. Degenerate input (empty clouds, one wall) gives a status.
+/// extraction options, then register_modelled_clouds. Optional per-point SemanticKITTI labels switch
+/// that side to the labels semantic mode. Degenerate input (empty clouds, one wall) gives a status.
 RegistrationResult register_clouds(const PointCloud& source, const PointCloud& target,
                                    const RegistrationOptions& options = {},
                                    const std::vector<std::uint32_t>& source_labels = {},
                                    const std::vector<std::uint32_t>& target_labels = {});
 
+/// A cloud with its scene model built beforehand, so a caller that registers one cloud in many pairs
+/// (the benchmark) models it once.
+struct ModelledCloud {
+  const PointCloud* cloud = nullptr;           ///< the cloud, in the frame the registration works in
+  const ModellingResult* modelling = nullptr;  ///< model_scene of that cloud with its side's extraction options
+  double modelling_ms = 0.0;                   ///< wall time that modelling took, ms (reported as the side's modelling time)
+};
+
+/// A change applied to both models after augmentation and before matching (model-level ablations).
+using ModelAdjustment = std::function<SceneModel(const SceneModel&)>;
+
+/// The pipeline after modelling, shared by register_clouds and the benchmark: the other side augmented
+/// when only one side was (augment_other_side, on a copy), `adjust_models` when given, register_models,
+/// then verify_registration on the clouds. Fills the counts of points and elements, the modelling
+/// timings and "total" (both modelling_ms plus this call).
+RegistrationResult register_modelled_clouds(const ModelledCloud& source, const ModelledCloud& target,
+                                            const RegistrationOptions& options = {},
+                                            const ModelAdjustment& adjust_models = {});
+
 /// Measures the answer's dense overlap into `result.overlap` (measure_overlap at 0.3 m, points near
 /// the source model's ground skipped) and demotes an `ok` answer to `ambiguous` when it overlaps
 /// less than leaving the source in place by more than `options.overlap_margin`: a transform that
-/// fits the points worse than not moving is not a confident answer. Adds an "overlap" timing (also
-/// to "total"). register_clouds and the benchmark call it after register_models.
+/// fits the points worse than not moving is not a confident answer (findings.fits_worse_than_identity).
+/// Adds to the "overlap" timing. verify_registration calls it.
 void check_overlap(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                    const AmbiguityOptions& options);
 
@@ -176,7 +212,7 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 /// check_overlap, then settles an `ambiguous` answer with search_weakest_direction when
 /// `options.dense_search.enabled`: when the best optimum beats every distinct optimum's overlap by
 /// `decisive_margin` it becomes the answer, `ok` (check_overlap runs again on it); otherwise the
-/// quadric answer stands, `ambiguous`. Adds "dense_search" and "overlap" timings (also to "total").
+/// quadric answer stands, `ambiguous`. Adds "dense_search" and "overlap" timings.
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                          const RegistrationOptions& options);
 

@@ -1,6 +1,8 @@
-// Registration presets, YAML configuration and the `auto` preset (see registration_config.h).
+// Registration presets, the table of YAML configuration keys and the `auto` preset (see
+// registration_config.h).
 #include "estimation/registration_config.h"
 
+#include "fitting/quadric_fitter.h"
 #include "geometry/error.h"
 
 #include <Eigen/Eigenvalues>
@@ -12,17 +14,148 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
-#include <filesystem>
-#include <functional>
-#include <map>
-#include <type_traits>
-#include <tuple>
-#include <unordered_map>
 #include <sstream>
+#include <tuple>
+#include <type_traits>
+#include <unordered_map>
 
 namespace quadrix {
 namespace {
+
+// The registration fields a preset sets beyond its sensor's extraction, only where they differ
+// from the paper's defaults. The extraction differences (the released per-sensor parameters of
+// REFERENCE.md "Extraction parameters per sensor", range limits, static-scan shape detection) are
+// extraction_preset's, beside ExtractionOptions in fitting/extraction.cpp.
+void apply_registration_differences(const std::string& preset, RegistrationOptions& options) {
+  if (preset == "monument") {
+    // Static scans model CGAL-detected shapes of a known type: the constrained fitter keeps that
+    // type and fits all its points (the monument's drum: radius 21.65 m), where the statistical
+    // fitter's moments of a partial arc are far off (16.1 m).
+    options.modelling.fitter = "constrained";
+  }
+  // vlp64, vlp16, mid360, avia: the paper's registration defaults (its experiments used these sensors).
+}
+
+// The extraction of `side`.
+ExtractionOptions& extraction_of(RegistrationOptions& options, ConfigSide side) {
+  return side == ConfigSide::Source ? options.source_extraction : options.target_extraction;
+}
+
+// The member options.*chain[0].*chain[1]... of a chain of pointers to members.
+template <auto... chain>
+RegistrationConfigMember shared_member(RegistrationOptions& options, ConfigSide /*side*/) {
+  return &(options .* ... .* chain);
+}
+
+// The member extraction_of(options, side).*chain[0].*chain[1]...
+template <auto... chain>
+RegistrationConfigMember extraction_member(RegistrationOptions& options, ConfigSide side) {
+  return &(extraction_of(options, side) .* ... .* chain);
+}
+
+// A key of a member shared by both sides (modelling, matching, estimation ...).
+template <auto... chain>
+RegistrationConfigKey shared_key(const char* path, const char* description,
+                                 std::vector<std::string> (*choices)() = nullptr) {
+  return {path, description, false, &shared_member<chain...>, choices};
+}
+
+// A key of a member of each side's extraction.
+template <auto... chain>
+RegistrationConfigKey extraction_key(const char* path, const char* description,
+                                     std::vector<std::string> (*choices)() = nullptr) {
+  return {path, description, true, &extraction_member<chain...>, choices};
+}
+
+constexpr const char* kSensorKey = "sensor";  // restarts the extraction from that preset before the other keys
+
+std::vector<RegistrationConfigKey> make_registration_config_keys() {
+  using E = ExtractionOptions;
+  using R = RegistrationOptions;
+  return {
+      extraction_key<&E::preset>(kSensorKey, "sensor preset the extraction restarts from before the other keys apply",
+                                 registration_preset_names),
+      // extraction (per side)
+      extraction_key<&E::minimum_range>("extraction.minimum_range", "points nearer the sensor are dropped, m"),
+      extraction_key<&E::maximum_range>("extraction.maximum_range", "points farther away are dropped, m (0: unlimited)"),
+      extraction_key<&E::static_scan>("extraction.static_scan", "CGAL Efficient RANSAC shapes instead of the LiDAR pipeline (static scans)"),
+      extraction_key<&E::up>("extraction.up", "up axis of the cloud, unitless (normalised when read)"),
+      extraction_key<&E::ground, &GroundOptions::inlier_distance>("extraction.ground.inlier_distance", "point-to-patch-plane distance of ground points, m"),
+      extraction_key<&E::ground, &GroundOptions::max_slope_deg>("extraction.ground.max_slope_deg", "ground patch normal at most this far from up, degrees"),
+      extraction_key<&E::ground, &GroundOptions::max_step_height>("extraction.ground.max_step_height", "height jump allowed between neighbouring ground patches, m"),
+      extraction_key<&E::planes, &PlaneOptions::voxel_size>("extraction.planes.voxel_size", "plane voxel edge, m"),
+      extraction_key<&E::planes, &PlaneOptions::merge_distance>("extraction.planes.merge_distance", "centroid-to-plane distance for merging planar voxels, m"),
+      extraction_key<&E::planes, &PlaneOptions::normal_cosine>("extraction.planes.normal_cosine", "|cos| between the normals of merged voxels, unitless"),
+      extraction_key<&E::planes, &PlaneOptions::eigenvalue_ratio>("extraction.planes.eigenvalue_ratio", "lambda_2 / lambda_1 above which a voxel is planar, unitless"),
+      extraction_key<&E::planes, &PlaneOptions::minimum_plane_points>("extraction.planes.minimum_plane_points", "planes with fewer points go back to clustering, points"),
+      extraction_key<&E::planes, &PlaneOptions::cluster_plane_width>("extraction.planes.cluster_plane_width", "minimum width of a wall found inside a cluster, m"),
+      extraction_key<&E::planes, &PlaneOptions::cluster_plane_area>("extraction.planes.cluster_plane_area", "minimum area of a wall found inside a cluster, m^2"),
+      extraction_key<&E::trunks, &TrunkOptions::enabled>("extraction.trunks.enabled", "separate trunks from their crowns in every cluster"),
+      extraction_key<&E::trunks, &TrunkOptions::maximum_radius>("extraction.trunks.maximum_radius", "stem points lie within this horizontal distance of its centre line, m"),
+      extraction_key<&E::trunks, &TrunkOptions::minimum_height>("extraction.trunks.minimum_height", "a stem is at least this tall, m"),
+      extraction_key<&E::trunks, &TrunkOptions::crownless_minimum_radius>("extraction.trunks.crownless_minimum_radius", "an upright line at least this thick across the view is a trunk without a crown, m (0: off)"),
+      extraction_key<&E::trunks, &TrunkOptions::crownless_slice_points>("extraction.trunks.crownless_slice_points", "a stem slice is measured only with at least this many points, points"),
+      extraction_key<&E::trunks, &TrunkOptions::crownless_top_tolerance_deg>("extraction.trunks.crownless_top_tolerance_deg", "a crownless stem's top lies within this elevation of the top of the view, degrees"),
+      extraction_key<&E::clusters, &ClusterOptions::radius>("extraction.clusters.radius", "points closer than this join one cluster, m"),
+      extraction_key<&E::clusters, &ClusterOptions::minimum_points>("extraction.clusters.minimum_points", "smaller clusters are dropped, points"),
+      extraction_key<&E::clusters, &ClusterOptions::maximum_points>("extraction.clusters.maximum_points", "larger clusters are dropped, points"),
+      extraction_key<&E::clusters, &ClusterOptions::maximum_extent>("extraction.clusters.maximum_extent", "clusters with a larger bounding-box diagonal are dropped, m"),
+      extraction_key<&E::lines, &LineOptions::inlier_distance>("extraction.lines.inlier_distance", "point-to-line distance of RANSAC inliers, m"),
+      extraction_key<&E::lines, &LineOptions::minimum_points>("extraction.lines.minimum_points", "inliers a line needs, points"),
+      extraction_key<&E::lines, &LineOptions::minimum_length>("extraction.lines.minimum_length", "extent of the inliers along the line, m"),
+      extraction_key<&E::shapes, &ShapeDetectionOptions::simplification_voxel>("extraction.shapes.simplification_voxel", "grid simplification before normals (static scans), m (0: off)"),
+      extraction_key<&E::shapes, &ShapeDetectionOptions::epsilon>("extraction.shapes.epsilon", "maximum point-to-shape distance, m"),
+      extraction_key<&E::shapes, &ShapeDetectionOptions::cluster_epsilon>("extraction.shapes.cluster_epsilon", "maximum distance between connected points of a shape, m"),
+      extraction_key<&E::shapes, &ShapeDetectionOptions::minimum_points>("extraction.shapes.minimum_points", "smallest shape, points"),
+      extraction_key<&E::shapes, &ShapeDetectionOptions::normal_threshold>("extraction.shapes.normal_threshold", "minimum |cos| between a point's normal and its shape's, unitless"),
+      // modelling
+      shared_key<&R::modelling, &ModellingOptions::fitter>("modelling.fitter", "QuadricFitter registry name", quadric_fitter_names),
+      shared_key<&R::modelling, &ModellingOptions::quadrics_per_class>("modelling.quadrics_per_class", "K_e: quadrics kept per semantic class, quadrics (paper 50)"),
+      shared_key<&R::modelling, &ModellingOptions::augmentation_threshold>("modelling.augmentation_threshold", "delta_a: augment below this many quadrics, quadrics (paper 60)"),
+      shared_key<&R::modelling, &ModellingOptions::augmented_elements_per_class>("modelling.augmented_elements_per_class", "K_a: largest elements per class down-sampled into points, elements (paper 10)"),
+      shared_key<&R::modelling, &ModellingOptions::augmentation_voxel>("modelling.augmentation_voxel", "v_a: voxel of the augmentation down-sampling, m (paper 0.5)"),
+      shared_key<&R::modelling, &ModellingOptions::maximum_augmented_points>("modelling.maximum_augmented_points", "cap on augmented points, evenly strided, points (0: none)"),
+      // matching
+      shared_key<&R::correspondences, &CorrespondenceOptions::top_k_similar>("matching.top_k_similar", "K_s: candidates kept per element in each direction, candidates (paper 20)"),
+      shared_key<&R::correspondences, &CorrespondenceOptions::match_augmented_points>("matching.match_augmented_points", "match augmented points by FPFH"),
+      shared_key<&R::graphs, &CompatibilityGraphOptions::thresholds>("matching.thresholds", "delta_m of each compatibility-graph level, non-negative and strictly ascending, m"),
+      shared_key<&R::clique_time_limit_ms>("matching.clique_time_limit_ms", "deadline of the whole graduated clique search, ms"),
+      shared_key<&R::clique_threads>("matching.clique_threads", "threads of the clique solver, threads (0: hardware concurrency)"),
+      // estimation
+      shared_key<&R::estimation, &EstimationOptions::refiner>("estimation.refiner", "refiner backend (LMOptimizer of Algorithm 1)", refiner_names),
+      shared_key<&R::estimation, &EstimationOptions::refinement, &RefinerOptions::max_iterations>("estimation.max_iterations", "LM iterations, iterations (published 300)"),
+      shared_key<&R::estimation, &EstimationOptions::refinement, &RefinerOptions::function_tolerance>("estimation.function_tolerance", "stop when |dF| / F is below this, unitless (published 1e-8)"),
+      shared_key<&R::estimation, &EstimationOptions::manhattan_tolerance_degrees>("estimation.manhattan_tolerance_degrees", "delta_g of f_pp in refinement, degrees (published 10)"),
+      shared_key<&R::estimation, &EstimationOptions::augment_non_central>("estimation.augment_non_central", "Augment() of Algorithm 1: samples on linear and planar centres"),
+      shared_key<&R::estimation, &EstimationOptions::use_ground_constraint>("estimation.use_ground_constraint", "add the ground plane-to-plane factor when both clouds have a ground"),
+      shared_key<&R::estimation, &EstimationOptions::ground_weight>("estimation.ground_weight", "weight of the ground factor, unitless"),
+      shared_key<&R::estimation, &EstimationOptions::minimum_inliers>("estimation.minimum_inliers", "a candidate needs at least this many clique correspondences, correspondences (paper 3)"),
+      // selection
+      shared_key<&R::selection, &SelectionOptions::dcs_phi>("selection.dcs_phi", "Phi of the DCS kernel of the candidate score, unitless (published 0.5)"),
+      shared_key<&R::selection, &SelectionOptions::manhattan_tolerance_degrees>("selection.manhattan_tolerance_degrees", "delta_g^e of f_pp in selection, degrees (published 5)"),
+      // ambiguity
+      shared_key<&R::ambiguity, &AmbiguityOptions::score_ratio>("ambiguity.score_ratio", "best / second-best score above this counts as close, unitless"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::translation_disagreement>("ambiguity.translation_disagreement", "candidates farther apart than this disagree, m"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::rotation_disagreement_degrees>("ambiguity.rotation_disagreement_degrees", "or rotated more than this apart, degrees"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::minimum_clique_for_ok>("ambiguity.minimum_clique_for_ok", "a winner supported by a smaller clique is ambiguous, correspondences"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::overlap_margin>("ambiguity.overlap_margin", "an ok answer overlapping less than the unmoved source by more than this is ambiguous, fraction (negative: no check)"),
+      // dense_search
+      shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),
+      shared_key<&R::dense_search, &DenseSearchOptions::voxel_size>("dense_search.voxel_size", "both clouds thinned to one point per cube of this edge, m (> 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::source_samples>("dense_search.source_samples", "source points ICP aligns, points (>= 6)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::normal_neighbours>("dense_search.normal_neighbours", "target neighbours of each normal's plane fit, points (>= 3)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correspondence_distance>("dense_search.correspondence_distance", "ICP drops pairs farther apart than this, m (> 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::iterations>("dense_search.iterations", "point-to-plane Gauss-Newton iterations per start, iterations"),
+      shared_key<&R::dense_search, &DenseSearchOptions::step>("dense_search.step", "spacing of the starts along the weakest direction, m (> 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::range>("dense_search.range", "the starts reach this far either side of the answer along it, m (>= 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::across_step>("dense_search.across_step", "spacing of the starts across the weakest direction, m (> 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::across_range>("dense_search.across_range", "the starts reach this far either side of the answer across it, m (>= 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::refine_band>("dense_search.refine_band", "optima within this overlap of the best are refined on all samples, fraction (>= 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::max_refined>("dense_search.max_refined", "at most this many optima refined, optima (>= 1)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::minimum_overlap>("dense_search.minimum_overlap", "a settled answer puts at least this fraction of the source on the target, fraction (0..1)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::decisive_margin>("dense_search.decisive_margin", "the winner's overlap beats every distinct optimum's by this, fraction (>= 0)"),
+  };
+}
 
 // Reads one scalar of type T at `key`, naming the file and key on a type error.
 template <typename T>
@@ -35,93 +168,140 @@ T scalar(const YAML::Node& node, const std::string& file, const std::string& key
   }
 }
 
-using Setter = std::function<void(const YAML::Node&, const std::string& key)>;
+// The names in `names`, comma separated.
+std::string joined(const std::vector<std::string>& names, const char* separator = ", ") {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : separator) + name;
+  return text;
+}
 
-// Walks a mapping; every key must be known (unknown keys are an Error naming key and file).
-void walk(const YAML::Node& node, const std::string& file, const std::string& prefix,
-          const std::map<std::string, Setter>& setters) {
+// Reads `node` into the member of `key` (the YAML form its type decides; see registration_config_schema).
+void read_member(const YAML::Node& node, const RegistrationConfigKey& key, const RegistrationConfigMember& member,
+                 const std::string& file) {
+  std::visit(
+      [&](auto* target) {
+        using T = std::remove_pointer_t<decltype(target)>;
+        if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+          if (!node.IsSequence() || node.size() != 3) throw file_error(file, "key '" + key.path + "' must be a list of 3 numbers");
+          Eigen::Vector3d value;
+          for (int i = 0; i < 3; ++i) value[i] = scalar<double>(node[i], file, key.path);
+          if (!(value.norm() > 0.0)) throw file_error(file, "key '" + key.path + "' must not be the zero vector");
+          if (std::abs(value.norm() - 1.0) > 1e-12) value.normalize();  // a unit vector is kept bit for bit
+          *target = value;
+        } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+          if (!node.IsSequence() || node.size() == 0)
+            throw file_error(file, "key '" + key.path + "' must be a non-empty list of numbers");
+          std::vector<double> values;
+          for (const auto& item : node) values.push_back(scalar<double>(item, file, key.path));
+          for (std::size_t i = 0; i < values.size(); ++i)
+            if (!(values[i] >= 0.0) || (i > 0 && values[i] <= values[i - 1]))
+              throw file_error(file, "key '" + key.path + "' must be non-negative and strictly ascending");
+          *target = values;
+        } else {
+          const T value = scalar<T>(node, file, key.path);
+          if constexpr (std::is_same_v<T, std::string>) {
+            if (key.choices != nullptr) {
+              const std::vector<std::string> valid = key.choices();
+              if (std::find(valid.begin(), valid.end(), value) == valid.end())
+                throw file_error(file, "key '" + key.path + "': unknown name '" + value + "' (expected one of: " + joined(valid) + ")");
+            }
+          }
+          *target = value;
+        }
+      },
+      member);
+}
+
+// The YAML text of a number: doubles as their shortest exact decimal (std::to_chars), so "0.15"
+// reads back as the same double.
+std::string number_text(double value) {
+  std::array<char, 32> buffer{};
+  const auto end = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value).ptr;
+  return std::string(buffer.data(), end);
+}
+
+// Writes the value of `member` in the YAML form read_member reads.
+void write_member(YAML::Emitter& out, const RegistrationConfigMember& member) {
+  std::visit(
+      [&out](auto* value) {
+        using T = std::remove_pointer_t<decltype(value)>;
+        if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+          out << YAML::Flow << YAML::BeginSeq << number_text(value->x()) << number_text(value->y())
+              << number_text(value->z()) << YAML::EndSeq;
+        } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+          out << YAML::Flow << YAML::BeginSeq;
+          for (const double item : *value) out << number_text(item);
+          out << YAML::EndSeq;
+        } else if constexpr (std::is_same_v<T, double>) {
+          out << number_text(*value);
+        } else {
+          out << *value;
+        }
+      },
+      member);
+}
+
+// The type of a key as the schema prints it.
+std::string type_name(const RegistrationConfigKey& key) {
+  RegistrationOptions options;
+  return std::visit(
+      [&key](auto* value) -> std::string {
+        using T = std::remove_pointer_t<decltype(value)>;
+        if constexpr (std::is_same_v<T, bool>) {
+          return "bool";
+        } else if constexpr (std::is_same_v<T, int>) {
+          return "integer";
+        } else if constexpr (std::is_same_v<T, std::size_t>) {
+          return "integer >= 0";
+        } else if constexpr (std::is_same_v<T, double>) {
+          return "number";
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          return key.choices != nullptr ? "name" : "string";
+        } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+          return "[number, ...]";
+        } else {
+          static_assert(std::is_same_v<T, Eigen::Vector3d>);
+          return "[x, y, z]";
+        }
+      },
+      key.member(options, ConfigSide::Source));
+}
+
+// The key of the table at the dotted `path`, or nullptr.
+const RegistrationConfigKey* find_key(const std::string& path) {
+  for (const RegistrationConfigKey& key : registration_config_keys())
+    if (key.path == path) return &key;
+  return nullptr;
+}
+
+// The names directly below the section `prefix` ("" for the top level), in table order.
+std::vector<std::string> names_below(const std::string& prefix) {
+  std::vector<std::string> names;
+  for (const RegistrationConfigKey& key : registration_config_keys()) {
+    if (!prefix.empty() && key.path.rfind(prefix + ".", 0) != 0) continue;
+    const std::string rest = prefix.empty() ? key.path : key.path.substr(prefix.size() + 1);
+    const std::string name = rest.substr(0, rest.find('.'));
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+  }
+  return names;
+}
+
+// Collects the keys set by the mapping `node` of the section `prefix` with their values; every name
+// must be a key of the table or a section holding some (else an Error naming the key and the file).
+void collect_keys(const YAML::Node& node, const std::string& prefix, const std::string& file,
+                  std::vector<std::pair<const RegistrationConfigKey*, YAML::Node>>& found) {
   if (!node.IsMap()) throw file_error(file, "'" + prefix + "' must be a mapping");
   for (const auto& entry : node) {
     const std::string name = entry.first.as<std::string>();
-    const std::string key = prefix.empty() ? name : prefix + "." + name;
-    const auto found = setters.find(name);
-    if (found == setters.end()) {
-      std::string known;
-      for (const auto& setter : setters) known += (known.empty() ? "" : ", ") + setter.first;
-      throw file_error(file, "unknown key '" + key + "' (known here: " + known + ")");
+    const std::string path = prefix.empty() ? name : prefix + "." + name;
+    if (const RegistrationConfigKey* key = find_key(path)) {
+      found.emplace_back(key, entry.second);
+    } else if (!names_below(path).empty()) {
+      collect_keys(entry.second, path, file, found);
+    } else {
+      throw file_error(file, "unknown key '" + path + "' (known here: " + joined(names_below(prefix)) + ")");
     }
-    found->second(entry.second, key);
   }
-}
-
-template <typename T>
-Setter set(const std::string& file, T& target) {
-  return [&target, file](const YAML::Node& node, const std::string& key) { target = scalar<T>(node, file, key); };
-}
-
-void apply_extraction(const YAML::Node& node, const std::string& file, ExtractionOptions& e) {
-  walk(node, file, "extraction",
-       {{"minimum_range", set(file, e.minimum_range)},
-        {"maximum_range", set(file, e.maximum_range)},
-        {"static_scan", set(file, e.static_scan)},
-        {"up",
-         [&e, file](const YAML::Node& value, const std::string& key) {
-           if (!value.IsSequence() || value.size() != 3) throw file_error(file, "key '" + key + "' must be a list of 3 numbers");
-           for (int i = 0; i < 3; ++i) e.up[i] = scalar<double>(value[i], file, key);
-           if (!(e.up.norm() > 0.0)) throw file_error(file, "key '" + key + "' must not be the zero vector");
-           if (std::abs(e.up.norm() - 1.0) > 1e-12) e.up.normalize();  // a unit vector is kept bit for bit
-         }},
-        {"ground",
-         [&e, file](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"inlier_distance", set(file, e.ground.inlier_distance)},
-                 {"max_slope_deg", set(file, e.ground.max_slope_deg)},
-                 {"max_step_height", set(file, e.ground.max_step_height)}});
-         }},
-        {"planes",
-         [&e, file](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"voxel_size", set(file, e.planes.voxel_size)},
-                 {"merge_distance", set(file, e.planes.merge_distance)},
-                 {"normal_cosine", set(file, e.planes.normal_cosine)},
-                 {"eigenvalue_ratio", set(file, e.planes.eigenvalue_ratio)},
-                 {"minimum_plane_points", set(file, e.planes.minimum_plane_points)},
-                 {"cluster_plane_width", set(file, e.planes.cluster_plane_width)},
-                 {"cluster_plane_area", set(file, e.planes.cluster_plane_area)}});
-         }},
-        {"trunks",
-         [&e, file](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"enabled", set(file, e.trunks.enabled)},
-                 {"maximum_radius", set(file, e.trunks.maximum_radius)},
-                 {"minimum_height", set(file, e.trunks.minimum_height)},
-                 {"crownless_minimum_radius", set(file, e.trunks.crownless_minimum_radius)},
-                 {"crownless_slice_points", set(file, e.trunks.crownless_slice_points)},
-                 {"crownless_top_tolerance_deg", set(file, e.trunks.crownless_top_tolerance_deg)}});
-         }},
-        {"clusters",
-         [&e, file](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"radius", set(file, e.clusters.radius)},
-                 {"minimum_points", set(file, e.clusters.minimum_points)},
-                 {"maximum_points", set(file, e.clusters.maximum_points)},
-                 {"maximum_extent", set(file, e.clusters.maximum_extent)}});
-         }},
-        {"lines",
-         [&e, file](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"inlier_distance", set(file, e.lines.inlier_distance)},
-                 {"minimum_points", set(file, e.lines.minimum_points)},
-                 {"minimum_length", set(file, e.lines.minimum_length)}});
-         }},
-        {"shapes", [&e, file](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"simplification_voxel", set(file, e.shapes.simplification_voxel)},
-                 {"epsilon", set(file, e.shapes.epsilon)},
-                 {"cluster_epsilon", set(file, e.shapes.cluster_epsilon)},
-                 {"minimum_points", set(file, e.shapes.minimum_points)},
-                 {"normal_threshold", set(file, e.shapes.normal_threshold)}});
-         }}});
 }
 
 }  // namespace
@@ -130,18 +310,37 @@ std::vector<std::string> registration_preset_names() { return extraction_preset_
 
 RegistrationOptions registration_preset(const std::string& name) {
   RegistrationOptions options;
-  options.source_extraction = extraction_preset(name);
+  options.source_extraction = extraction_preset(name);  // throws for unknown names, listing the valid ones
   options.target_extraction = options.source_extraction;
-  // Static scans model CGAL-detected shapes of a known type: the constrained fitter keeps that type
-  // and fits all its points (the monument's drum: radius 21.65 m), where the statistical fitter's
-  // moments of a partial arc are far off (16.1 m).
-  if (name == "monument") options.modelling.fitter = "constrained";
+  apply_registration_differences(name, options);
   return options;
 }
 
-std::string registration_presets_directory() {
-  if (const char* from_environment = std::getenv("QUADRIX_PRESETS_DIR")) return from_environment;
-  return (std::filesystem::path(__FILE__).parent_path() / "presets").string();
+const std::vector<RegistrationConfigKey>& registration_config_keys() {
+  static const std::vector<RegistrationConfigKey> keys = make_registration_config_keys();
+  return keys;
+}
+
+std::string registration_config_schema() {
+  std::size_t path_width = 0, type_width = 0;
+  for (const RegistrationConfigKey& key : registration_config_keys()) {
+    path_width = std::max(path_width, key.path.size());
+    type_width = std::max(type_width, type_name(key).size());
+  }
+  std::ostringstream text;
+  text << "# Keys of the registration configuration (--config FILE.yaml), every one optional. A dotted\n"
+          "# path is nested YAML: extraction.planes.voxel_size is `extraction: {planes: {voxel_size: 1.0}}`.\n"
+          "# sensor and extraction.* are per side (both clouds unless a side is chosen); `sensor` restarts\n"
+          "# the extraction from that preset before the other keys apply. Unknown keys are an error.\n";
+  for (const RegistrationConfigKey& key : registration_config_keys()) {
+    std::string path = key.path, type = type_name(key);
+    path.resize(path_width, ' ');
+    type.resize(type_width, ' ');
+    text << path << "  " << type << "  " << key.description;
+    if (key.choices != nullptr) text << "; one of " << joined(key.choices(), "|");
+    text << "\n";
+  }
+  return text.str();
 }
 
 void apply_registration_config(const std::string& path, RegistrationOptions& options, const std::string& side) {
@@ -157,103 +356,28 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
   }
   if (root.IsNull()) return;  // an empty file changes nothing
   if (!root.IsMap()) throw file_error(path, "the configuration must be a mapping of sections");
-  const bool source_side = side != "target";
-  const bool target_side = side != "source";
-  // `sensor` first: it restarts the extraction, the other sections then override it.
-  if (const YAML::Node sensor = root["sensor"]) {
-    const std::string name = scalar<std::string>(sensor, path, "sensor");
-    ExtractionOptions base;
-    try {
-      base = extraction_preset(name);
-    } catch (const Error& error) {
-      throw file_error(path, std::string("key 'sensor': ") + error.what());
+  std::vector<std::pair<const RegistrationConfigKey*, YAML::Node>> found;
+  collect_keys(root, "", path, found);
+  std::vector<ConfigSide> sides;
+  if (side != "target") sides.push_back(ConfigSide::Source);
+  if (side != "source") sides.push_back(ConfigSide::Target);
+  // `sensor` first: it restarts the extraction, the other keys then override it. (The entries are
+  // visited in two passes, not reordered: assigning a YAML::Node rewrites the node it refers to.)
+  for (const bool sensor_pass : {true, false}) {
+    for (const auto& [key, node] : found) {
+      if ((key->path == kSensorKey) != sensor_pass) continue;
+      if (!key->per_side) {
+        read_member(node, *key, key->member(options, ConfigSide::Source), path);
+        continue;
+      }
+      for (const ConfigSide each : sides) {
+        read_member(node, *key, key->member(options, each), path);
+        if (sensor_pass) extraction_of(options, each) = extraction_preset(extraction_of(options, each).preset);
+      }
     }
-    if (source_side) options.source_extraction = base;
-    if (target_side) options.target_extraction = base;
   }
-  RegistrationOptions& o = options;
-  const std::string file = path;
-  walk(root, path, "",
-       {{"sensor", [](const YAML::Node&, const std::string&) {}},
-        {"extraction",
-         [&](const YAML::Node& value, const std::string&) {
-           if (source_side) apply_extraction(value, file, o.source_extraction);
-           if (target_side) apply_extraction(value, file, o.target_extraction);
-         }},
-        {"modelling",
-         [&](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"fitter", set(file, o.modelling.fitter)},
-                 {"quadrics_per_class", set(file, o.modelling.quadrics_per_class)},
-                 {"augmentation_threshold", set(file, o.modelling.augmentation_threshold)},
-                 {"augmented_elements_per_class", set(file, o.modelling.augmented_elements_per_class)},
-                 {"augmentation_voxel", set(file, o.modelling.augmentation_voxel)},
-                 {"maximum_augmented_points", set(file, o.modelling.maximum_augmented_points)}});
-         }},
-        {"matching",
-         [&](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"top_k_similar", set(file, o.correspondences.top_k_similar)},
-                 {"match_augmented_points", set(file, o.correspondences.match_augmented_points)},
-                 {"clique_time_limit_ms", set(file, o.clique_time_limit_ms)},
-                 {"clique_threads", set(file, o.clique_threads)},
-                 {"thresholds", [&](const YAML::Node& list, const std::string& list_key) {
-                    if (!list.IsSequence() || list.size() == 0)
-                      throw file_error(file, "key '" + list_key + "' must be a non-empty list of metres");
-                    o.graphs.thresholds.clear();
-                    for (const auto& item : list) o.graphs.thresholds.push_back(scalar<double>(item, file, list_key));
-                    for (std::size_t i = 0; i < o.graphs.thresholds.size(); ++i)
-                      if (!(o.graphs.thresholds[i] >= 0.0) || (i > 0 && o.graphs.thresholds[i] <= o.graphs.thresholds[i - 1]))
-                        throw file_error(file, "key '" + list_key + "' must be non-negative and strictly ascending");
-                  }}});
-         }},
-        {"estimation",
-         [&](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"refiner", set(file, o.estimation.refiner)},
-                 {"max_iterations", set(file, o.estimation.refinement.max_iterations)},
-                 {"function_tolerance", set(file, o.estimation.refinement.function_tolerance)},
-                 {"manhattan_tolerance_degrees", set(file, o.estimation.manhattan_tolerance_degrees)},
-                 {"augment_non_central", set(file, o.estimation.augment_non_central)},
-                 {"use_ground_constraint", set(file, o.estimation.use_ground_constraint)},
-                 {"ground_weight", set(file, o.estimation.ground_weight)},
-                 {"minimum_inliers", set(file, o.estimation.minimum_inliers)}});
-         }},
-        {"selection",
-         [&](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"dcs_phi", set(file, o.selection.dcs_phi)},
-                 {"manhattan_tolerance_degrees", set(file, o.selection.manhattan_tolerance_degrees)}});
-         }},
-        {"ambiguity", [&](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"score_ratio", set(file, o.ambiguity.score_ratio)},
-                 {"translation_disagreement", set(file, o.ambiguity.translation_disagreement)},
-                 {"rotation_disagreement_degrees", set(file, o.ambiguity.rotation_disagreement_degrees)},
-                 {"minimum_clique_for_ok", set(file, o.ambiguity.minimum_clique_for_ok)},
-                 {"overlap_margin", set(file, o.ambiguity.overlap_margin)}});
-         }},
-        {"dense_search", [&](const YAML::Node& value, const std::string& key) {
-           walk(value, file, key,
-                {{"enabled", set(file, o.dense_search.enabled)},
-                 {"voxel_size", set(file, o.dense_search.voxel_size)},
-                 {"source_samples", set(file, o.dense_search.source_samples)},
-                 {"normal_neighbours", set(file, o.dense_search.normal_neighbours)},
-                 {"correspondence_distance", set(file, o.dense_search.correspondence_distance)},
-                 {"iterations", set(file, o.dense_search.iterations)},
-                 {"step", set(file, o.dense_search.step)},
-                 {"range", set(file, o.dense_search.range)},
-                 {"across_step", set(file, o.dense_search.across_step)},
-                 {"across_range", set(file, o.dense_search.across_range)},
-                 {"refine_band", set(file, o.dense_search.refine_band)},
-                 {"max_refined", set(file, o.dense_search.max_refined)},
-                 {"minimum_overlap", set(file, o.dense_search.minimum_overlap)},
-                 {"decisive_margin", set(file, o.dense_search.decisive_margin)}});
-         }}});
-  if (refiner_registry().count(o.estimation.refiner) == 0)
-    throw file_error(path, "key 'estimation.refiner': unknown refiner '" + o.estimation.refiner + "'");
   try {
-    validate_dense_search_options(o.dense_search);
+    validate_dense_search_options(options.dense_search);
   } catch (const Error& error) {
     throw file_error(path, error.what());
   }
@@ -262,131 +386,34 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
 std::string registration_config_yaml(const RegistrationOptions& options, const std::string& side) {
   if (side != "source" && side != "target")
     throw Error("registration_config_yaml: side must be source or target, got '" + side + "'");
-  const ExtractionOptions& e = side == "source" ? options.source_extraction : options.target_extraction;
+  const ConfigSide which = side == "source" ? ConfigSide::Source : ConfigSide::Target;
+  RegistrationOptions values = options;  // the table reaches members through non-const options
   YAML::Emitter out;
-  // Doubles as their shortest exact decimal (std::to_chars): "0.15", and reading it back gives the same double.
-  const auto text = [](const auto& value) {
-    if constexpr (std::is_floating_point_v<std::decay_t<decltype(value)>>) {
-      std::array<char, 32> buffer{};
-      const auto end = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value).ptr;
-      return std::string(buffer.data(), end);
-    } else {
-      return value;
-    }
-  };
-  const auto key_value = [&out, &text](const char* key, const auto& value) { out << YAML::Key << key << YAML::Value << text(value); };
-  const auto list = [&out, &text](const char* key, const std::vector<double>& values) {
-    out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
-    for (const double value : values) out << text(value);
-    out << YAML::EndSeq;
-  };
-  const auto begin = [&out](const char* key) { out << YAML::Key << key << YAML::Value << YAML::BeginMap; };
   out << YAML::BeginMap;
-  begin("extraction");
-  key_value("minimum_range", e.minimum_range);
-  key_value("maximum_range", e.maximum_range);
-  key_value("static_scan", e.static_scan);
-  list("up", {e.up.x(), e.up.y(), e.up.z()});
-  begin("ground");
-  key_value("inlier_distance", e.ground.inlier_distance);
-  key_value("max_slope_deg", e.ground.max_slope_deg);
-  key_value("max_step_height", e.ground.max_step_height);
+  std::vector<std::string> open_sections;  // the nested mappings the previous key was written in
+  for (const RegistrationConfigKey& key : registration_config_keys()) {
+    std::vector<std::string> parts;
+    for (std::size_t begin = 0, dot = 0; dot != std::string::npos; begin = dot + 1) {
+      dot = key.path.find('.', begin);
+      parts.push_back(key.path.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin));
+    }
+    std::size_t shared = 0;  // sections this key shares with the previous one (the table groups each section's keys)
+    while (shared < open_sections.size() && shared + 1 < parts.size() && open_sections[shared] == parts[shared]) ++shared;
+    while (open_sections.size() > shared) {
+      out << YAML::EndMap;
+      open_sections.pop_back();
+    }
+    while (open_sections.size() + 1 < parts.size()) {
+      const std::string& section = parts[open_sections.size()];
+      out << YAML::Key << section << YAML::Value << YAML::BeginMap;
+      open_sections.push_back(section);
+    }
+    out << YAML::Key << parts.back() << YAML::Value;
+    write_member(out, key.member(values, which));
+  }
+  for (std::size_t section = 0; section < open_sections.size(); ++section) out << YAML::EndMap;
   out << YAML::EndMap;
-  begin("planes");
-  key_value("voxel_size", e.planes.voxel_size);
-  key_value("merge_distance", e.planes.merge_distance);
-  key_value("normal_cosine", e.planes.normal_cosine);
-  key_value("eigenvalue_ratio", e.planes.eigenvalue_ratio);
-  key_value("minimum_plane_points", e.planes.minimum_plane_points);
-  key_value("cluster_plane_width", e.planes.cluster_plane_width);
-  key_value("cluster_plane_area", e.planes.cluster_plane_area);
-  out << YAML::EndMap;
-  begin("trunks");
-  key_value("enabled", e.trunks.enabled);
-  key_value("maximum_radius", e.trunks.maximum_radius);
-  key_value("minimum_height", e.trunks.minimum_height);
-  key_value("crownless_minimum_radius", e.trunks.crownless_minimum_radius);
-  key_value("crownless_slice_points", e.trunks.crownless_slice_points);
-  key_value("crownless_top_tolerance_deg", e.trunks.crownless_top_tolerance_deg);
-  out << YAML::EndMap;
-  begin("clusters");
-  key_value("radius", e.clusters.radius);
-  key_value("minimum_points", e.clusters.minimum_points);
-  key_value("maximum_points", e.clusters.maximum_points);
-  key_value("maximum_extent", e.clusters.maximum_extent);
-  out << YAML::EndMap;
-  begin("lines");
-  key_value("inlier_distance", e.lines.inlier_distance);
-  key_value("minimum_points", e.lines.minimum_points);
-  key_value("minimum_length", e.lines.minimum_length);
-  out << YAML::EndMap;
-  begin("shapes");
-  key_value("simplification_voxel", e.shapes.simplification_voxel);
-  key_value("epsilon", e.shapes.epsilon);
-  key_value("cluster_epsilon", e.shapes.cluster_epsilon);
-  key_value("minimum_points", e.shapes.minimum_points);
-  key_value("normal_threshold", e.shapes.normal_threshold);
-  out << YAML::EndMap << YAML::EndMap;
-  begin("modelling");
-  key_value("fitter", options.modelling.fitter);
-  key_value("quadrics_per_class", options.modelling.quadrics_per_class);
-  key_value("augmentation_threshold", options.modelling.augmentation_threshold);
-  key_value("augmented_elements_per_class", options.modelling.augmented_elements_per_class);
-  key_value("augmentation_voxel", options.modelling.augmentation_voxel);
-  key_value("maximum_augmented_points", options.modelling.maximum_augmented_points);
-  out << YAML::EndMap;
-  begin("matching");
-  key_value("top_k_similar", options.correspondences.top_k_similar);
-  key_value("match_augmented_points", options.correspondences.match_augmented_points);
-  list("thresholds", options.graphs.thresholds);
-  key_value("clique_time_limit_ms", options.clique_time_limit_ms);
-  key_value("clique_threads", options.clique_threads);
-  out << YAML::EndMap;
-  begin("estimation");
-  key_value("refiner", options.estimation.refiner);
-  key_value("max_iterations", options.estimation.refinement.max_iterations);
-  key_value("function_tolerance", options.estimation.refinement.function_tolerance);
-  key_value("manhattan_tolerance_degrees", options.estimation.manhattan_tolerance_degrees);
-  key_value("augment_non_central", options.estimation.augment_non_central);
-  key_value("use_ground_constraint", options.estimation.use_ground_constraint);
-  key_value("ground_weight", options.estimation.ground_weight);
-  key_value("minimum_inliers", options.estimation.minimum_inliers);
-  out << YAML::EndMap;
-  begin("selection");
-  key_value("dcs_phi", options.selection.dcs_phi);
-  key_value("manhattan_tolerance_degrees", options.selection.manhattan_tolerance_degrees);
-  out << YAML::EndMap;
-  begin("ambiguity");
-  key_value("score_ratio", options.ambiguity.score_ratio);
-  key_value("translation_disagreement", options.ambiguity.translation_disagreement);
-  key_value("rotation_disagreement_degrees", options.ambiguity.rotation_disagreement_degrees);
-  key_value("minimum_clique_for_ok", options.ambiguity.minimum_clique_for_ok);
-  key_value("overlap_margin", options.ambiguity.overlap_margin);
-  out << YAML::EndMap;
-  begin("dense_search");
-  key_value("enabled", options.dense_search.enabled);
-  key_value("voxel_size", options.dense_search.voxel_size);
-  key_value("source_samples", options.dense_search.source_samples);
-  key_value("normal_neighbours", options.dense_search.normal_neighbours);
-  key_value("correspondence_distance", options.dense_search.correspondence_distance);
-  key_value("iterations", options.dense_search.iterations);
-  key_value("step", options.dense_search.step);
-  key_value("range", options.dense_search.range);
-  key_value("across_step", options.dense_search.across_step);
-  key_value("across_range", options.dense_search.across_range);
-  key_value("refine_band", options.dense_search.refine_band);
-  key_value("max_refined", options.dense_search.max_refined);
-  key_value("minimum_overlap", options.dense_search.minimum_overlap);
-  key_value("decisive_margin", options.dense_search.decisive_margin);
-  out << YAML::EndMap << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
-}
-
-RegistrationOptions load_registration_preset(const std::string& name) {
-  RegistrationOptions options = registration_preset(name);
-  const std::filesystem::path file = std::filesystem::path(registration_presets_directory()) / (name + ".yaml");
-  if (std::filesystem::exists(file)) apply_registration_config(file.string(), options);
-  return options;
 }
 
 namespace {
@@ -637,9 +664,9 @@ RegistrationOptions resolve_registration_options(const std::string& source_prese
                                                  std::string* notes) {
   // One side: a named preset's options as they are, or auto's guess with the measured up axis.
   const auto resolve = [&](const std::string& requested, const PointCloud& cloud, const char* side) {
-    if (requested != "auto") return load_registration_preset(requested);
+    if (requested != "auto") return registration_preset(requested);
     const SensorGuess guess = guess_sensor_preset(cloud);
-    RegistrationOptions options = load_registration_preset(guess.preset);
+    RegistrationOptions options = registration_preset(guess.preset);
     if (guess.up.found) options.source_extraction.up = options.target_extraction.up = guess.up.up;
     if (guess.near_field_fraction > 0.1)  // self-hits of the platform: crop them (its preset's value when larger)
       options.source_extraction.minimum_range = options.target_extraction.minimum_range =

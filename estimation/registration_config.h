@@ -1,7 +1,9 @@
 // Registration presets and YAML configuration (DESIGN.md §6): the C++ option structs hold the
-// defaults (paper values); a preset is extraction_preset(name) plus those defaults; YAML files
-// (estimation/presets/<name>.yaml, or --config FILE) override fields. Unknown keys are an Error
-// naming the key and the file. `auto` chooses a preset from measurable properties of the cloud.
+// defaults (the paper's values); a preset is those defaults plus what differs for one sensor
+// (extraction_preset(name) on both sides and the few registration fields listed in
+// registration_preset); a YAML file (--config FILE) then overrides fields. One table of keys
+// (registration_config_keys) drives reading, writing and the printed schema. Unknown keys are an
+// Error naming the key and the file. `auto` chooses a preset from measurable properties of the cloud.
 #pragma once
 
 #include "estimation/registration.h"
@@ -9,7 +11,9 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace quadrix {
@@ -17,42 +21,50 @@ namespace quadrix {
 /// Names accepted by registration_preset: vlp64, vlp16, mid360, avia, monument.
 std::vector<std::string> registration_preset_names();
 
-/// Paper defaults with the extraction preset `name` on both sides (C++ values only, no file read).
-/// Throws quadrix::Error listing the valid names otherwise.
+/// The paper's defaults plus what the preset `name` changes: its sensor's extraction
+/// (extraction_preset) on both sides and its registration fields (only monument has one: the
+/// constrained fitter). Throws quadrix::Error listing the valid names otherwise.
 RegistrationOptions registration_preset(const std::string& name);
 
-/// Folder of the preset YAML files: $QUADRIX_PRESETS_DIR if set, else estimation/presets of the source tree.
-std::string registration_presets_directory();
+/// Which side's extraction a per-side configuration key reaches.
+enum class ConfigSide { Source, Target };
 
-/// Applies the YAML file `path` to `options` (both sides' extraction unless `side` is "source" or
-/// "target"). Schema (every key optional):
-///   sensor: vlp64|vlp16|mid360|avia|monument   (restarts the extraction from that preset)
-///   extraction: {minimum_range, maximum_range, static_scan, up: [x,y,z],
-///                ground: {inlier_distance, max_slope_deg, max_step_height},
-///                planes: {voxel_size, merge_distance, normal_cosine, eigenvalue_ratio, minimum_plane_points},
-///                clusters: {radius, minimum_points, maximum_points, maximum_extent},
-///                lines: {inlier_distance, minimum_points, minimum_length},
-///                shapes: {simplification_voxel, epsilon, cluster_epsilon, minimum_points, normal_threshold}}
-///   modelling: {fitter, quadrics_per_class, augmentation_threshold, augmented_elements_per_class, augmentation_voxel}
-///   matching: {top_k_similar, match_augmented_points, thresholds: [..], clique_time_limit_ms, clique_threads}
-///   estimation: {refiner, max_iterations, function_tolerance, manhattan_tolerance_degrees,
-///                augment_non_central, use_ground_constraint, ground_weight, minimum_inliers}
-///   selection: {dcs_phi, manhattan_tolerance_degrees}
-///   ambiguity: {score_ratio, translation_disagreement, rotation_disagreement_degrees, minimum_clique_for_ok, overlap_margin}
-///   dense_search: {enabled, voxel_size, source_samples, normal_neighbours, correspondence_distance, iterations,
-///                  step, range, across_step, across_range, refine_band, max_refined,
-///                  minimum_overlap, decisive_margin}
-/// Throws quadrix::Error naming the file and the key for unknown keys, wrong types or unreadable files.
+/// The member of RegistrationOptions one configuration key reads and writes (its type decides the
+/// YAML form: bool, integer, non-negative integer, number, string, list of numbers, [x, y, z]).
+using RegistrationConfigMember =
+    std::variant<bool*, int*, std::size_t*, double*, std::string*, std::vector<double>*, Eigen::Vector3d*>;
+
+/// One key of the YAML configuration: a row of the table behind apply_registration_config,
+/// registration_config_yaml and registration_config_schema.
+struct RegistrationConfigKey {
+  std::string path;         ///< dotted YAML path, e.g. "extraction.planes.voxel_size"
+  std::string description;  ///< what it sets, one line with its unit
+  bool per_side = false;    ///< an extraction key: set on the source, the target or both (`side` of apply_registration_config)
+  RegistrationConfigMember (*member)(RegistrationOptions& options, ConfigSide side) = nullptr;  ///< the member it reaches (`side` used by per-side keys)
+  std::vector<std::string> (*choices)() = nullptr;  ///< the valid names of a string key (nullptr: any string)
+};
+
+/// Every key of the YAML configuration, in the order registration_config_yaml writes them
+/// (`sensor` first: reading it restarts the extraction from that preset before the other keys).
+const std::vector<RegistrationConfigKey>& registration_config_keys();
+
+/// The schema of the YAML configuration as text: one line per key of registration_config_keys with
+/// its type (and valid names) and description, plus how `sensor`, `up` and lists are read.
+std::string registration_config_schema();
+
+/// Applies the YAML file `path` to `options`: every key of registration_config_keys is optional;
+/// per-side keys (`sensor`, `extraction.*`) go to both sides' extraction unless `side` is "source"
+/// or "target". `sensor` restarts that extraction from extraction_preset first; `extraction.up`
+/// is normalised (non-zero); `matching.thresholds` is a non-empty, non-negative, strictly ascending
+/// list; string keys with choices must name one of them; the dense_search block must pass
+/// validate_dense_search_options. Throws quadrix::Error naming the file and the key for unknown
+/// keys, wrong types, out-of-range values or unreadable files.
 void apply_registration_config(const std::string& path, RegistrationOptions& options, const std::string& side = "both");
 
-/// The options in the schema of apply_registration_config (every key it accepts, `extraction` from
-/// `side`: "source" or "target"), as YAML a user can save, edit and pass back with --config;
-/// applying it reproduces every value it lists. Throws quadrix::Error for another side.
+/// Every key of registration_config_keys with its value in `options` (per-side keys from `side`:
+/// "source" or "target") as YAML a user can save, edit and pass back with --config; applying it
+/// reproduces every value it lists. Throws quadrix::Error for another side.
 std::string registration_config_yaml(const RegistrationOptions& options, const std::string& side = "source");
-
-/// The preset `name` as the user sees it: registration_preset(name), then its YAML file from
-/// registration_presets_directory() when present (its values mirror the C++ ones; edits take effect).
-RegistrationOptions load_registration_preset(const std::string& name);
 
 /// The up axis of a cloud measured from its planar structure (the `auto` preset's levelling).
 struct UpDirectionEstimate {
@@ -95,10 +107,10 @@ struct SensorGuess {
 /// the platform's own body: auto then crops everything nearer than 2 m.
 SensorGuess guess_sensor_preset(const PointCloud& cloud);
 
-/// Registration options for a pair: each side's preset by name, or "auto" (guess_sensor_preset,
-/// whose estimated up axis is also set on that side's extraction). Presets load their YAML files
-/// (load_registration_preset). The reasons of every auto choice are appended to `notes` when given.
-/// Throws quadrix::Error for an unknown preset name.
+/// Registration options for a pair: each side's preset by name (registration_preset), or "auto"
+/// (guess_sensor_preset, whose estimated up axis is also set on that side's extraction). The
+/// reasons of every auto choice are appended to `notes` when given. Throws quadrix::Error for an
+/// unknown preset name.
 RegistrationOptions resolve_registration_options(const std::string& source_preset, const PointCloud& source,
                                                  const std::string& target_preset, const PointCloud& target,
                                                  std::string* notes = nullptr);

@@ -1,4 +1,4 @@
-// The `cgal` fitter (issue 5): the element's primitive found by CGAL 5.5 shape detection (Efficient
+// The `cgal` fitter: the element's primitive found by CGAL 5.5 shape detection (Efficient
 // RANSAC, Schnabel et al. 2007) restricted to the requested type, its parameters (plane normal and
 // offset, sphere centre and radius, cylinder axis and radius, cone apex, axis and half-angle)
 // converted to Q = P^-T C P^-1 (paper Eq. (Q=PCP)) with Quadric::from_canonical. Planes are refitted

@@ -6,6 +6,7 @@
 //    paper §"Quadric Extraction" step 1(b)).
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
+#include "geometry/constants.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Random.h>
@@ -104,7 +105,7 @@ std::vector<std::vector<std::uint32_t>> cgal_region_growing_planes(const Eigen::
   using RegionGrowing = CGAL::Shape_detection::Region_growing<PointWithNormalVector, NeighborQuery, RegionType,
                                                               typename Sorting::Seed_map>;
   NeighborQuery neighbor_query(input, neighbours, PointMap());
-  const double angle_deg = std::acos(std::clamp(options.normal_cosine, -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+  const double angle_deg = std::acos(std::clamp(options.normal_cosine, -1.0, 1.0)) * 180.0 / kPi;
   RegionType region_type(input, options.merge_distance, angle_deg,
                          static_cast<std::size_t>(std::max(3, options.minimum_plane_points)), PointMap(), NormalMap());
   Sorting sorting(input, neighbor_query, PointMap());
@@ -125,7 +126,6 @@ std::vector<std::vector<std::uint32_t>> cgal_region_growing_planes(const Eigen::
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// One Efficient RANSAC shape in Eigen terms with the simplified points it holds.
 struct DetectedShape {
@@ -448,6 +448,357 @@ bool refit(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, cons
   return true;
 }
 
+/// Whether `candidate` explains the points `members`: RMS distance and the fraction within epsilon
+/// inside the explained_rms / explained_fraction bounds of the options.
+bool explains(const DetectedShape& candidate, const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members,
+              const ShapeDetectionOptions& shape_options) {
+  const double epsilon = shape_options.epsilon;
+  const Agreement fit = agreement(candidate, points, members, epsilon);
+  return fit.rms <= shape_options.explained_rms * epsilon && fit.inside_fraction >= shape_options.explained_fraction;
+}
+
+/// The smallest cone half-angle that is not a cylinder in disguise, radians.
+double minimum_cone_angle(const ShapeDetectionOptions& shape_options) {
+  return shape_options.minimum_cone_angle_deg * kPi / 180.0;
+}
+
+/// Grid simplification: one representative per voxel of edge `voxel` (voxel <= 0: every point is
+/// its own); every point follows its representative (`representative_of_point` indexes `representatives`).
+void simplify_on_grid(const Eigen::Matrix3Xd& points, double voxel, std::vector<std::uint32_t>& representative_of_point,
+                      std::vector<std::uint32_t>& representatives) {
+  const std::size_t count = static_cast<std::size_t>(points.cols());
+  representative_of_point.assign(count, 0);
+  representatives.clear();
+  if (voxel > 0.0) {
+    std::unordered_map<std::uint64_t, std::uint32_t> voxel_representative;
+    voxel_representative.reserve(count / 4 + 16);
+    const double inverse = 1.0 / voxel;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const Eigen::Vector3i c((points.col(i) * inverse).array().floor().cast<int>());
+      auto [it, inserted] = voxel_representative.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()),
+                                                             static_cast<std::uint32_t>(representatives.size()));
+      if (inserted) representatives.push_back(i);
+      representative_of_point[i] = it->second;
+    }
+  } else {
+    representatives.resize(count);
+    for (std::uint32_t i = 0; i < count; ++i) representatives[i] = representative_of_point[i] = i;
+  }
+}
+
+/// The representatives as CGAL points with normals: the given normals, or +z placeholders when the
+/// cloud has none (estimate_oriented_normals replaces them).
+PointWithNormalVector representatives_with_normals(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals,
+                                                   bool have_normals, const std::vector<std::uint32_t>& representatives) {
+  PointWithNormalVector input;
+  input.reserve(representatives.size());
+  for (const std::uint32_t index : representatives) {
+    const Eigen::Vector3d n = have_normals ? Eigen::Vector3d(normals.col(index)) : Eigen::Vector3d::UnitZ();
+    input.emplace_back(to_point(points.col(index)), Vector3(n.x(), n.y(), n.z()));
+  }
+  return input;
+}
+
+/// Normals by CGAL jet fitting over `neighbours` neighbours, oriented toward the scanner (a TLS
+/// station sees the outside of each surface).
+void estimate_oriented_normals(PointWithNormalVector& input, int neighbours, const Eigen::Vector3d& sensor_origin) {
+  if (input.size() >= 3) {
+    CGAL::jet_estimate_normals<CGAL::Parallel_if_available_tag>(
+        input, static_cast<unsigned>(std::max(3, neighbours)),
+        CGAL::parameters::point_map(PointMap()).normal_map(NormalMap()));
+  }
+  for (PointWithNormal& item : input) {
+    const Eigen::Vector3d p(item.first.x(), item.first.y(), item.first.z());
+    const Eigen::Vector3d n(item.second.x(), item.second.y(), item.second.z());
+    if (n.dot(sensor_origin - p) < 0.0) item.second = -item.second;
+  }
+}
+
+/// A shape found by Efficient RANSAC in Eigen terms, holding the simplified points it was assigned.
+/// Planes are refitted by least squares (CGAL's plane from its last refit may be off on far, sparse
+/// pieces); tori stay Object (not quadrics; fitted as ellipsoids).
+DetectedShape detected_shape_of(const EfficientRansac::Shape& shape, const RansacPointVector& ransac_input,
+                                const Eigen::Matrix3Xd& simplified) {
+  const auto vector = [](const Vector3& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); };
+  const auto point = [](const Point3& p) { return Eigen::Vector3d(p.x(), p.y(), p.z()); };
+  DetectedShape detected;
+  for (const std::size_t i : shape.indices_of_assigned_points()) detected.members.push_back(std::get<2>(ransac_input[i]));
+  if (dynamic_cast<const RansacPlane*>(&shape) != nullptr) {
+    detected = fit_plane(simplified, detected.members);
+    for (const std::size_t i : shape.indices_of_assigned_points()) detected.members.push_back(std::get<2>(ransac_input[i]));
+  } else if (const auto* cylinder = dynamic_cast<const RansacCylinder*>(&shape)) {
+    const auto axis = cylinder->axis();
+    detected.element_class = ElementClass::Cylinder;
+    detected.type = QuadricType::CircularCylinder;
+    detected.axis = vector(axis.to_vector()).normalized();
+    detected.point = point(axis.point(0));
+    detected.size = cylinder->radius();
+  } else if (const auto* sphere = dynamic_cast<const RansacSphere*>(&shape)) {
+    detected.element_class = ElementClass::Sphere;
+    detected.type = QuadricType::Sphere;
+    detected.point = point(sphere->center());
+    detected.size = sphere->radius();
+  } else if (const auto* cone = dynamic_cast<const RansacCone*>(&shape)) {
+    detected.element_class = ElementClass::Cone;
+    detected.type = QuadricType::CircularCone;
+    detected.axis = vector(cone->axis()).normalized();
+    detected.point = point(cone->apex());
+    detected.size = cone->angle();
+  }
+  update_bounds(simplified, detected);
+  return detected;
+}
+
+/// Efficient RANSAC on the simplified points with every Parameters field from the options (seeded
+/// for deterministic runs), appending the shapes found to `shapes`. Nothing runs on fewer than
+/// minimum_points points. False when Efficient RANSAC ran out of memory.
+bool detect_ransac_shapes(const PointWithNormalVector& input, const Eigen::Matrix3Xd& simplified,
+                          const ShapeDetectionOptions& shape_options, std::vector<DetectedShape>& shapes) {
+  if (input.size() < static_cast<std::size_t>(std::max(3, shape_options.minimum_points))) return true;
+  CGAL::get_default_random() = CGAL::Random(shape_options.seed);
+  RansacPointVector ransac_input;
+  ransac_input.reserve(input.size());
+  for (std::uint32_t i = 0; i < input.size(); ++i) ransac_input.emplace_back(input[i].first, input[i].second, i);
+  EfficientRansac ransac;
+  ransac.set_input(ransac_input, RansacPointMap(), RansacNormalMap());
+  if (shape_options.detect_planes) ransac.add_shape_factory<RansacPlane>();
+  if (shape_options.detect_cylinders) ransac.add_shape_factory<RansacCylinder>();
+  if (shape_options.detect_spheres) ransac.add_shape_factory<TwoSidedSphere>();
+  if (shape_options.detect_cones) ransac.add_shape_factory<RansacCone>();
+  if (shape_options.detect_tori) ransac.add_shape_factory<RansacTorus>();
+  EfficientRansac::Parameters parameters;
+  parameters.probability = shape_options.probability;
+  parameters.min_points = static_cast<std::size_t>(std::max(1, shape_options.minimum_points));
+  parameters.epsilon = shape_options.epsilon;
+  parameters.cluster_epsilon = shape_options.cluster_epsilon;
+  parameters.normal_threshold = shape_options.normal_threshold;
+  try {
+    ransac.preprocess();
+    ransac.detect(parameters);
+  } catch (const std::bad_alloc&) {
+    return false;
+  }
+  for (const auto& shape : ransac.shapes()) shapes.push_back(detected_shape_of(*shape, ransac_input, simplified));
+  return true;
+}
+
+/// The simplest quadric that explains a shape's points replaces it: Efficient RANSAC returns strips
+/// of a large floor as cylinders of huge radius, and columns as cones of a tiny angle.
+void replace_by_simplest_quadrics(std::vector<DetectedShape>& shapes, const Eigen::Matrix3Xd& simplified,
+                                  const Eigen::Matrix3Xd& simplified_normals, const ShapeDetectionOptions& shape_options) {
+  const double epsilon = shape_options.epsilon;
+  const double minimum_angle = minimum_cone_angle(shape_options);
+  for (DetectedShape& shape : shapes) {
+    if (shape.type == QuadricType::Plane || shape.type == QuadricType::Invalid) continue;
+    DetectedShape simpler = fit_plane(simplified, shape.members);
+    simpler.members = shape.members;
+    if (explains(simpler, simplified, shape.members, shape_options)) {
+      simpler.lower = shape.lower, simpler.upper = shape.upper;
+      shape = std::move(simpler);
+      continue;
+    }
+    // A cone narrower than minimum_cone_angle_deg is a cylinder (a column piece) even where its
+    // few extra parameters fit the noise a little better.
+    if (shape.type == QuadricType::CircularCone && fit_cylinder(simplified, shape.members, shape.axis, simpler) &&
+        (shape.size < minimum_angle || explains(simpler, simplified, shape.members, shape_options))) {
+      simpler.lower = shape.lower, simpler.upper = shape.upper;
+      shape = std::move(simpler);
+      continue;
+    }
+    // The other way round: a piece of a wide cone seen from afar (noisy normals, so Efficient RANSAC
+    // never proposes the cone) comes back as a cylinder; a cone fitted from its normals that halves
+    // the distances of a cylinder on the same points replaces it.
+    DetectedShape cone, cylinder;
+    if (shape.type == QuadricType::CircularCylinder && fit_cylinder(simplified, shape.members, shape.axis, cylinder) &&
+        fit_cone(simplified, simplified_normals, shape.members, cone) &&
+        cone.size >= minimum_angle && explains(cone, simplified, shape.members, shape_options) &&
+        agreement(cone, simplified, shape.members, epsilon).rms <=
+            0.5 * agreement(cylinder, simplified, shape.members, epsilon).rms) {
+      cone.members = std::move(shape.members);
+      cone.lower = shape.lower, cone.upper = shape.upper;
+      shape = std::move(cone);
+    }
+  }
+}
+
+/// A band of a wide cone close to a station can come back as a tilted cylinder whose own cone fit
+/// (from noisy normals) goes astray, while a smaller patch of the same cone is found as a cone
+/// (whose angle a small patch pins down poorly). When the cone, refined on the points of both from
+/// its own parameters, explains them all, the piece joins it (and is left empty).
+/// Cones narrower than minimum_cone_angle_deg are cylinders in disguise (a column) and take no part.
+void join_cylinder_pieces_to_cones(std::vector<DetectedShape>& shapes, const Eigen::Matrix3Xd& simplified,
+                                   const ShapeDetectionOptions& shape_options) {
+  const double minimum_angle = minimum_cone_angle(shape_options);
+  for (DetectedShape& cone : shapes) {
+    if (cone.type != QuadricType::CircularCone || cone.size < minimum_angle) continue;
+    for (DetectedShape& piece : shapes) {
+      if (piece.type != QuadricType::CircularCylinder || piece.members.empty()) continue;
+      std::vector<std::uint32_t> united = cone.members;
+      united.insert(united.end(), piece.members.begin(), piece.members.end());
+      DetectedShape joined = cone;
+      if (!refine_cone(simplified, united, joined) || joined.size < minimum_angle ||
+          !explains(joined, simplified, united, shape_options))
+        continue;
+      joined.members = std::move(united);
+      joined.lower = cone.lower.cwiseMin(piece.lower);
+      joined.upper = cone.upper.cwiseMax(piece.upper);
+      cone = std::move(joined);
+      piece.members.clear();
+    }
+  }
+}
+
+/// Efficient RANSAC keeps the largest connected piece of each candidate, so one surface cut by
+/// occlusion shadows (a plaza behind columns) or seen in arcs from several stations (a column)
+/// returns as several shapes of similar parameters. A smaller shape joins a larger one of its type
+/// (shapes sorted by decreasing size) when their parameters are close and one refitted shape
+/// explains the points of both; the smaller one is left empty.
+void merge_similar_shapes(std::vector<DetectedShape>& shapes, const Eigen::Matrix3Xd& simplified,
+                          const Eigen::Matrix3Xd& simplified_normals, const ShapeDetectionOptions& shape_options,
+                          const Eigen::Vector3d& up_direction) {
+  const double cos_angle = std::cos(shape_options.merge_angle_deg * kPi / 180.0);
+  const double cos_ten_degrees = std::cos(10.0 * kPi / 180.0);
+  const Eigen::Vector3d up = up_direction.normalized();
+  const double distance = shape_options.merge_distance;
+  const DetectedShape* ground_candidate = nullptr;
+  for (const DetectedShape& shape : shapes)
+    if (ground_candidate == nullptr && shape.type == QuadricType::Plane && std::abs(shape.axis.dot(up)) >= cos_ten_degrees)
+      ground_candidate = &shape;
+  const auto similar_size = [&](double a, double b) {
+    return std::abs(a - b) <= shape_options.merge_radius_fraction * std::max(a, b);
+  };
+  const auto close = [&](const DetectedShape& a, const DetectedShape& b) {
+    if (a.type != b.type) return false;
+    const Eigen::Vector3d offset = b.point - a.point;
+    switch (a.type) {
+      case QuadricType::Plane:
+        // Coplanar faces far apart stay apart (a podium and an entablature in one plane), except on
+        // the largest near-horizontal plane: the ground, shadowed by everything on it.
+        return std::abs(a.axis.dot(b.axis)) >= cos_angle && std::abs(a.axis.dot(offset)) <= distance &&
+               (&a == ground_candidate ||
+                pieces_within(simplified, a, b, shape_options.merge_plane_gap));
+      case QuadricType::CircularCylinder:
+        return std::abs(a.axis.dot(b.axis)) >= cos_angle && similar_size(a.size, b.size) &&
+               (offset - offset.dot(a.axis) * a.axis).norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
+      case QuadricType::Sphere:
+        return similar_size(a.size, b.size) && offset.norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
+      case QuadricType::CircularCone:
+        // Apexes of wide cones fitted to pieces lie far from the points: only axes and angles gate.
+        return a.axis.dot(b.axis) >= cos_angle && std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0;
+      default: return false;
+    }
+  };
+  for (std::size_t b = 1; b < shapes.size(); ++b) {
+    for (std::size_t a = 0; a < b; ++a) {
+      if (shapes[a].members.empty() || !close(shapes[a], shapes[b])) continue;
+      std::vector<std::uint32_t> united = shapes[a].members;
+      united.insert(united.end(), shapes[b].members.begin(), shapes[b].members.end());
+      DetectedShape candidate;
+      if (!refit(simplified, simplified_normals, united, shapes[a], candidate) ||
+          !explains(candidate, simplified, united, shape_options))
+        continue;
+      candidate.lower = shapes[a].lower.cwiseMin(shapes[b].lower);
+      candidate.upper = shapes[a].upper.cwiseMax(shapes[b].upper);
+      shapes[a] = std::move(candidate);
+      shapes[b].members.clear();
+      break;
+    }
+  }
+}
+
+/// A shape whose points larger shapes already explain (a strip of a column taken for a plane, a
+/// band of a dome, the seam where two walls meet) adds nothing: when at least absorb_fraction of its
+/// points lie within epsilon of larger shapes, each goes to the nearest of them, the rest are left
+/// out, and the shape is left empty. Shapes are sorted by decreasing size.
+void absorb_explained_shapes(std::vector<DetectedShape>& shapes, const Eigen::Matrix3Xd& simplified,
+                             const ShapeDetectionOptions& shape_options) {
+  const double epsilon = shape_options.epsilon;
+  const double reach = shape_options.cluster_epsilon;
+  for (std::size_t s = shapes.size(); s-- > 1;) {
+    DetectedShape& small = shapes[s];
+    if (small.members.empty()) continue;
+    std::vector<int> explainer(small.members.size(), -1);
+    std::size_t explained = 0;
+    for (std::size_t k = 0; k < small.members.size(); ++k) {
+      const Eigen::Vector3d p = simplified.col(small.members[k]);
+      double best = epsilon;
+      for (std::size_t l = 0; l < s; ++l) {
+        const DetectedShape& large = shapes[l];
+        if (large.members.empty() || (p.array() < large.lower.array() - reach).any() ||
+            (p.array() > large.upper.array() + reach).any())
+          continue;
+        const double d = surface_distance(large, p);
+        if (d <= best) best = d, explainer[k] = static_cast<int>(l);
+      }
+      if (explainer[k] >= 0) ++explained;
+    }
+    if (static_cast<double>(explained) < shape_options.absorb_fraction * static_cast<double>(small.members.size())) continue;
+    for (std::size_t k = 0; k < small.members.size(); ++k) {
+      if (explainer[k] < 0) continue;
+      DetectedShape& large = shapes[static_cast<std::size_t>(explainer[k])];
+      large.members.push_back(small.members[k]);
+      large.lower = large.lower.cwiseMin(simplified.col(small.members[k]));
+      large.upper = large.upper.cwiseMax(simplified.col(small.members[k]));
+    }
+    small.members.clear();
+  }
+}
+
+/// One element per shape, holding every original point whose representative the shape holds.
+std::vector<Element> elements_of_shapes(const std::vector<DetectedShape>& shapes, std::size_t representative_count,
+                                        const std::vector<std::uint32_t>& representative_of_point) {
+  std::vector<int> shape_of_representative(representative_count, -1);
+  for (std::size_t id = 0; id < shapes.size(); ++id)
+    for (const std::uint32_t i : shapes[id].members) shape_of_representative[i] = static_cast<int>(id);
+  std::vector<Element> elements(shapes.size());
+  for (std::size_t id = 0; id < shapes.size(); ++id) {
+    elements[id].element_class = shapes[id].element_class;
+    elements[id].detected_type = shapes[id].type;
+  }
+  for (std::uint32_t i = 0; i < representative_of_point.size(); ++i) {
+    const int id = shape_of_representative[representative_of_point[i]];
+    if (id >= 0) elements[static_cast<std::size_t>(id)].point_indices.push_back(i);
+  }
+  return elements;
+}
+
+/// Ground: the lowest of the large near-horizontal planes (within 10 deg of `up_direction`, at least
+/// a tenth of the largest one's points) becomes the Ground element, moved to the front, and its PCA
+/// plane fills the result's ground fields.
+void mark_ground_element(const std::vector<DetectedShape>& shapes, const Eigen::Matrix3Xd& points,
+                         const Eigen::Vector3d& up_direction, std::vector<Element>& elements, ExtractionResult& result) {
+  const Eigen::Vector3d up = up_direction.normalized();
+  const double cos_ten_degrees = std::cos(10.0 * kPi / 180.0);
+  std::size_t largest = 0;
+  for (std::size_t id = 0; id < shapes.size(); ++id)
+    if (shapes[id].type == QuadricType::Plane && std::abs(shapes[id].axis.dot(up)) >= cos_ten_degrees)
+      largest = std::max(largest, elements[id].point_indices.size());
+  int ground = -1;
+  double ground_height = 1e300;
+  for (std::size_t id = 0; id < shapes.size(); ++id) {
+    if (shapes[id].type != QuadricType::Plane || std::abs(shapes[id].axis.dot(up)) < cos_ten_degrees) continue;
+    if (elements[id].point_indices.size() * 10 < largest) continue;
+    double height = 0.0;
+    for (const std::uint32_t index : elements[id].point_indices) height += up.dot(points.col(index));
+    height /= static_cast<double>(elements[id].point_indices.size());
+    if (height < ground_height) {
+      ground_height = height;
+      ground = static_cast<int>(id);
+    }
+  }
+  if (ground < 0) return;
+  Element& element = elements[static_cast<std::size_t>(ground)];
+  element.element_class = ElementClass::Ground;
+  detail::Moments moments;
+  for (const std::uint32_t index : element.point_indices) moments.add(points.col(index));
+  Eigen::Vector3d normal = detail::principal_axes(moments.covariance()).vectors.col(0);
+  if (normal.dot(up) < 0) normal = -normal;
+  result.has_ground = true;
+  result.ground_normal = normal;
+  result.ground_offset = -normal.dot(moments.mean());
+  std::rotate(elements.begin(), elements.begin() + ground, elements.begin() + ground + 1);
+}
+
 }  // namespace
 
 ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals,
@@ -464,46 +815,15 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
   }
   const bool have_normals = normals.cols() == points.cols() && normals.allFinite();
 
-  // Grid simplification: one representative per voxel; every point follows its representative.
-  std::vector<std::uint32_t> representative_of_point(count);
+  std::vector<std::uint32_t> representative_of_point;
   std::vector<std::uint32_t> representatives;
-  if (shape_options.simplification_voxel > 0.0) {
-    std::unordered_map<std::uint64_t, std::uint32_t> voxel_representative;
-    voxel_representative.reserve(count / 4 + 16);
-    const double inverse = 1.0 / shape_options.simplification_voxel;
-    for (std::uint32_t i = 0; i < count; ++i) {
-      const Eigen::Vector3i c((points.col(i) * inverse).array().floor().cast<int>());
-      auto [it, inserted] = voxel_representative.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()),
-                                                             static_cast<std::uint32_t>(representatives.size()));
-      if (inserted) representatives.push_back(i);
-      representative_of_point[i] = it->second;
-    }
-  } else {
-    representatives.resize(count);
-    for (std::uint32_t i = 0; i < count; ++i) representatives[i] = representative_of_point[i] = i;
-  }
-  PointWithNormalVector input;
-  input.reserve(representatives.size());
-  for (const std::uint32_t index : representatives) {
-    const Eigen::Vector3d n = have_normals ? Eigen::Vector3d(normals.col(index)) : Eigen::Vector3d::UnitZ();
-    input.emplace_back(to_point(points.col(index)), Vector3(n.x(), n.y(), n.z()));
-  }
+  simplify_on_grid(points, shape_options.simplification_voxel, representative_of_point, representatives);
+  PointWithNormalVector input = representatives_with_normals(points, normals, have_normals, representatives);
   result.timings_ms["simplification"] = detail::elapsed_ms(start);
 
+  // Normals that came with the cloud are kept as given.
   auto stage = std::chrono::steady_clock::now();
-  if (!have_normals && input.size() >= 3) {
-    CGAL::jet_estimate_normals<CGAL::Parallel_if_available_tag>(
-        input, static_cast<unsigned>(std::max(3, shape_options.normal_neighbours)),
-        CGAL::parameters::point_map(PointMap()).normal_map(NormalMap()));
-  }
-  // Orient estimated normals toward the scanner (a TLS station sees the outside of each surface);
-  // normals that came with the cloud are kept as given.
-  for (PointWithNormal& item : input) {
-    if (have_normals) break;
-    const Eigen::Vector3d p(item.first.x(), item.first.y(), item.first.z());
-    const Eigen::Vector3d n(item.second.x(), item.second.y(), item.second.z());
-    if (n.dot(options.sensor_origin - p) < 0.0) item.second = -item.second;
-  }
+  if (!have_normals) estimate_oriented_normals(input, shape_options.normal_neighbours, options.sensor_origin);
   result.timings_ms["normals"] = detail::elapsed_ms(stage);
 
   stage = std::chrono::steady_clock::now();
@@ -515,268 +835,27 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
     simplified_normals.col(static_cast<Eigen::Index>(i)) =
         Eigen::Vector3d(input[i].second.x(), input[i].second.y(), input[i].second.z()).normalized();
   std::vector<DetectedShape> shapes;
-  if (input.size() >= static_cast<std::size_t>(std::max(3, shape_options.minimum_points))) {
-    CGAL::get_default_random() = CGAL::Random(shape_options.seed);
-    RansacPointVector ransac_input;
-    ransac_input.reserve(input.size());
-    for (std::uint32_t i = 0; i < input.size(); ++i) ransac_input.emplace_back(input[i].first, input[i].second, i);
-    EfficientRansac ransac;
-    ransac.set_input(ransac_input, RansacPointMap(), RansacNormalMap());
-    if (shape_options.detect_planes) ransac.add_shape_factory<RansacPlane>();
-    if (shape_options.detect_cylinders) ransac.add_shape_factory<RansacCylinder>();
-    if (shape_options.detect_spheres) ransac.add_shape_factory<TwoSidedSphere>();
-    if (shape_options.detect_cones) ransac.add_shape_factory<RansacCone>();
-    if (shape_options.detect_tori) ransac.add_shape_factory<RansacTorus>();
-    EfficientRansac::Parameters parameters;
-    parameters.probability = shape_options.probability;
-    parameters.min_points = static_cast<std::size_t>(std::max(1, shape_options.minimum_points));
-    parameters.epsilon = shape_options.epsilon;
-    parameters.cluster_epsilon = shape_options.cluster_epsilon;
-    parameters.normal_threshold = shape_options.normal_threshold;
-    try {
-      ransac.preprocess();
-      ransac.detect(parameters);
-    } catch (const std::bad_alloc&) {
-      result.status = ExtractionStatus::NoElements;
-      result.message = "Efficient RANSAC ran out of memory on " + std::to_string(input.size()) +
-                       " simplified points (raise simplification_voxel or cluster_epsilon)";
-      result.timings_ms["shape_detection"] = detail::elapsed_ms(stage);
-      return result;
-    }
-    const auto vector = [](const Vector3& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); };
-    const auto point = [](const Point3& p) { return Eigen::Vector3d(p.x(), p.y(), p.z()); };
-    for (const auto& shape : ransac.shapes()) {
-      DetectedShape detected;
-      for (const std::size_t i : shape->indices_of_assigned_points()) detected.members.push_back(std::get<2>(ransac_input[i]));
-      if (dynamic_cast<const RansacPlane*>(shape.get()) != nullptr) {
-        // CGAL's plane from its last refit may be off on far, sparse pieces: least squares on its points.
-        detected = fit_plane(simplified, detected.members);
-        for (const std::size_t i : shape->indices_of_assigned_points()) detected.members.push_back(std::get<2>(ransac_input[i]));
-      } else if (const auto* cylinder = dynamic_cast<const RansacCylinder*>(shape.get())) {
-        const auto axis = cylinder->axis();
-        detected.element_class = ElementClass::Cylinder;
-        detected.type = QuadricType::CircularCylinder;
-        detected.axis = vector(axis.to_vector()).normalized();
-        detected.point = point(axis.point(0));
-        detected.size = cylinder->radius();
-      } else if (const auto* sphere = dynamic_cast<const RansacSphere*>(shape.get())) {
-        detected.element_class = ElementClass::Sphere;
-        detected.type = QuadricType::Sphere;
-        detected.point = point(sphere->center());
-        detected.size = sphere->radius();
-      } else if (const auto* cone = dynamic_cast<const RansacCone*>(shape.get())) {
-        detected.element_class = ElementClass::Cone;
-        detected.type = QuadricType::CircularCone;
-        detected.axis = vector(cone->axis()).normalized();
-        detected.point = point(cone->apex());
-        detected.size = cone->angle();
-      }  // tori stay Object (not quadrics; fitted as ellipsoids)
-      update_bounds(simplified, detected);
-      shapes.push_back(std::move(detected));
-    }
+  if (!detect_ransac_shapes(input, simplified, shape_options, shapes)) {
+    result.status = ExtractionStatus::NoElements;
+    result.message = "Efficient RANSAC ran out of memory on " + std::to_string(input.size()) +
+                     " simplified points (raise simplification_voxel or cluster_epsilon)";
+    result.timings_ms["shape_detection"] = detail::elapsed_ms(stage);
+    return result;
   }
   result.timings_ms["shape_detection"] = detail::elapsed_ms(stage);
 
   stage = std::chrono::steady_clock::now();
-  const double epsilon = shape_options.epsilon;
-  const auto explains = [&](const DetectedShape& candidate, const std::vector<std::uint32_t>& members) {
-    const Agreement fit = agreement(candidate, simplified, members, epsilon);
-    return fit.rms <= shape_options.explained_rms * epsilon && fit.inside_fraction >= shape_options.explained_fraction;
-  };
-  const double minimum_cone_angle = shape_options.minimum_cone_angle_deg * kPi / 180.0;
-  // The simplest quadric that explains a shape's points replaces it: Efficient RANSAC returns strips
-  // of a large floor as cylinders of huge radius, and columns as cones of a tiny angle.
-  for (DetectedShape& shape : shapes) {
-    if (shape.type == QuadricType::Plane || shape.type == QuadricType::Invalid) continue;
-    DetectedShape simpler = fit_plane(simplified, shape.members);
-    simpler.members = shape.members;
-    if (explains(simpler, shape.members)) {
-      simpler.lower = shape.lower, simpler.upper = shape.upper;
-      shape = std::move(simpler);
-      continue;
-    }
-    // A cone narrower than minimum_cone_angle_deg is a cylinder (a column piece) even where its
-    // few extra parameters fit the noise a little better.
-    if (shape.type == QuadricType::CircularCone && fit_cylinder(simplified, shape.members, shape.axis, simpler) &&
-        (shape.size < minimum_cone_angle || explains(simpler, shape.members))) {
-      simpler.lower = shape.lower, simpler.upper = shape.upper;
-      shape = std::move(simpler);
-      continue;
-    }
-    // The other way round: a piece of a wide cone seen from afar (noisy normals, so Efficient RANSAC
-    // never proposes the cone) comes back as a cylinder; a cone fitted from its normals that halves
-    // the distances of a cylinder on the same points replaces it.
-    DetectedShape cone, cylinder;
-    if (shape.type == QuadricType::CircularCylinder && fit_cylinder(simplified, shape.members, shape.axis, cylinder) &&
-        fit_cone(simplified, simplified_normals, shape.members, cone) &&
-        cone.size >= minimum_cone_angle && explains(cone, shape.members) &&
-        agreement(cone, simplified, shape.members, epsilon).rms <=
-            0.5 * agreement(cylinder, simplified, shape.members, epsilon).rms) {
-      cone.members = std::move(shape.members);
-      cone.lower = shape.lower, cone.upper = shape.upper;
-      shape = std::move(cone);
-    }
-  }
-  // A band of a wide cone close to a station can come back as a tilted cylinder whose own cone fit
-  // (from noisy normals) goes astray, while a smaller patch of the same cone is found as a cone
-  // (whose angle a small patch pins down poorly). When the cone, refined on the points of both from
-  // its own parameters, explains them all, the piece joins it.
-  // Cones narrower than minimum_cone_angle_deg are cylinders in disguise (a column) and take no part.
-  for (DetectedShape& cone : shapes) {
-    if (cone.type != QuadricType::CircularCone || cone.size < minimum_cone_angle) continue;
-    for (DetectedShape& piece : shapes) {
-      if (piece.type != QuadricType::CircularCylinder || piece.members.empty()) continue;
-      std::vector<std::uint32_t> united = cone.members;
-      united.insert(united.end(), piece.members.begin(), piece.members.end());
-      DetectedShape joined = cone;
-      if (!refine_cone(simplified, united, joined) || joined.size < minimum_cone_angle || !explains(joined, united))
-        continue;
-      joined.members = std::move(united);
-      joined.lower = cone.lower.cwiseMin(piece.lower);
-      joined.upper = cone.upper.cwiseMax(piece.upper);
-      cone = std::move(joined);
-      piece.members.clear();
-    }
-  }
+  replace_by_simplest_quadrics(shapes, simplified, simplified_normals, shape_options);
+  join_cylinder_pieces_to_cones(shapes, simplified, shape_options);
   std::stable_sort(shapes.begin(), shapes.end(),
                    [](const DetectedShape& a, const DetectedShape& b) { return a.members.size() > b.members.size(); });
-
-  // Efficient RANSAC keeps the largest connected piece of each candidate, so one surface cut by
-  // occlusion shadows (a plaza behind columns) or seen in arcs from several stations (a column)
-  // returns as several shapes of similar parameters. A smaller shape joins a larger one of its type
-  // when their parameters are close and one refitted shape explains the points of both.
-  if (shape_options.merge_equal_shapes && shapes.size() > 1) {
-    const double cos_angle = std::cos(shape_options.merge_angle_deg * kPi / 180.0);
-    const double cos_ten_degrees = std::cos(10.0 * kPi / 180.0);
-    const Eigen::Vector3d up = options.up.normalized();
-    const double distance = shape_options.merge_distance;
-    const DetectedShape* ground_candidate = nullptr;
-    for (const DetectedShape& shape : shapes)
-      if (ground_candidate == nullptr && shape.type == QuadricType::Plane && std::abs(shape.axis.dot(up)) >= cos_ten_degrees)
-        ground_candidate = &shape;
-    const auto similar_size = [&](double a, double b) {
-      return std::abs(a - b) <= shape_options.merge_radius_fraction * std::max(a, b);
-    };
-    const auto close = [&](const DetectedShape& a, const DetectedShape& b) {
-      if (a.type != b.type) return false;
-      const Eigen::Vector3d offset = b.point - a.point;
-      switch (a.type) {
-        case QuadricType::Plane:
-          // Coplanar faces far apart stay apart (a podium and an entablature in one plane), except on
-          // the largest near-horizontal plane: the ground, shadowed by everything on it.
-          return std::abs(a.axis.dot(b.axis)) >= cos_angle && std::abs(a.axis.dot(offset)) <= distance &&
-                 (&a == ground_candidate ||
-                  pieces_within(simplified, a, b, shape_options.merge_plane_gap));
-        case QuadricType::CircularCylinder:
-          return std::abs(a.axis.dot(b.axis)) >= cos_angle && similar_size(a.size, b.size) &&
-                 (offset - offset.dot(a.axis) * a.axis).norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
-        case QuadricType::Sphere:
-          return similar_size(a.size, b.size) && offset.norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
-        case QuadricType::CircularCone:
-          // Apexes of wide cones fitted to pieces lie far from the points: only axes and angles gate.
-          return a.axis.dot(b.axis) >= cos_angle && std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0;
-        default: return false;
-      }
-    };
-    for (std::size_t b = 1; b < shapes.size(); ++b) {
-      for (std::size_t a = 0; a < b; ++a) {
-        if (shapes[a].members.empty() || !close(shapes[a], shapes[b])) continue;
-        std::vector<std::uint32_t> united = shapes[a].members;
-        united.insert(united.end(), shapes[b].members.begin(), shapes[b].members.end());
-        DetectedShape candidate;
-        if (!refit(simplified, simplified_normals, united, shapes[a], candidate) || !explains(candidate, united)) continue;
-        candidate.lower = shapes[a].lower.cwiseMin(shapes[b].lower);
-        candidate.upper = shapes[a].upper.cwiseMax(shapes[b].upper);
-        shapes[a] = std::move(candidate);
-        shapes[b].members.clear();
-        break;
-      }
-    }
-  }
-
-  // A shape whose points larger shapes already explain (a strip of a column taken for a plane, a
-  // band of a dome, the seam where two walls meet) adds nothing: its points go to the shape that
-  // explains each of them, the rest are left out.
-  if (shape_options.absorb_fraction <= 1.0) {
-    const double reach = shape_options.cluster_epsilon;
-    for (std::size_t s = shapes.size(); s-- > 1;) {
-      DetectedShape& small = shapes[s];
-      if (small.members.empty()) continue;
-      std::vector<int> explainer(small.members.size(), -1);
-      std::size_t explained = 0;
-      for (std::size_t k = 0; k < small.members.size(); ++k) {
-        const Eigen::Vector3d p = simplified.col(small.members[k]);
-        double best = epsilon;
-        for (std::size_t l = 0; l < s; ++l) {
-          const DetectedShape& large = shapes[l];
-          if (large.members.empty() || (p.array() < large.lower.array() - reach).any() ||
-              (p.array() > large.upper.array() + reach).any())
-            continue;
-          const double d = surface_distance(large, p);
-          if (d <= best) best = d, explainer[k] = static_cast<int>(l);
-        }
-        if (explainer[k] >= 0) ++explained;
-      }
-      if (static_cast<double>(explained) < shape_options.absorb_fraction * static_cast<double>(small.members.size())) continue;
-      for (std::size_t k = 0; k < small.members.size(); ++k) {
-        if (explainer[k] < 0) continue;
-        DetectedShape& large = shapes[static_cast<std::size_t>(explainer[k])];
-        large.members.push_back(small.members[k]);
-        large.lower = large.lower.cwiseMin(simplified.col(small.members[k]));
-        large.upper = large.upper.cwiseMax(simplified.col(small.members[k]));
-      }
-      small.members.clear();
-    }
-  }
-  std::vector<int> shape_of_representative(input.size(), -1);
-  for (std::size_t id = 0; id < shapes.size(); ++id)
-    for (const std::uint32_t i : shapes[id].members) shape_of_representative[i] = static_cast<int>(id);
+  if (shape_options.merge_equal_shapes && shapes.size() > 1)
+    merge_similar_shapes(shapes, simplified, simplified_normals, shape_options, options.up);
+  if (shape_options.absorb_fraction <= 1.0) absorb_explained_shapes(shapes, simplified, shape_options);
   result.timings_ms["shape_refinement"] = detail::elapsed_ms(stage);
 
-  std::vector<Element> elements(shapes.size());
-  for (std::size_t id = 0; id < shapes.size(); ++id) {
-    elements[id].element_class = shapes[id].element_class;
-    elements[id].detected_type = shapes[id].type;
-  }
-  for (std::uint32_t i = 0; i < count; ++i) {
-    const int id = shape_of_representative[representative_of_point[i]];
-    if (id >= 0) elements[static_cast<std::size_t>(id)].point_indices.push_back(i);
-  }
-
-  // Ground: the lowest of the large near-horizontal planes.
-  if (shape_options.mark_ground) {
-    const Eigen::Vector3d up = options.up.normalized();
-    const double cos_ten_degrees = std::cos(10.0 * 3.14159265358979323846 / 180.0);
-    std::size_t largest = 0;
-    for (std::size_t id = 0; id < shapes.size(); ++id)
-      if (shapes[id].type == QuadricType::Plane && std::abs(shapes[id].axis.dot(up)) >= cos_ten_degrees)
-        largest = std::max(largest, elements[id].point_indices.size());
-    int ground = -1;
-    double ground_height = 1e300;
-    for (std::size_t id = 0; id < shapes.size(); ++id) {
-      if (shapes[id].type != QuadricType::Plane || std::abs(shapes[id].axis.dot(up)) < cos_ten_degrees) continue;
-      if (elements[id].point_indices.size() * 10 < largest) continue;
-      double height = 0.0;
-      for (const std::uint32_t index : elements[id].point_indices) height += up.dot(points.col(index));
-      height /= static_cast<double>(elements[id].point_indices.size());
-      if (height < ground_height) {
-        ground_height = height;
-        ground = static_cast<int>(id);
-      }
-    }
-    if (ground >= 0) {
-      Element& element = elements[static_cast<std::size_t>(ground)];
-      element.element_class = ElementClass::Ground;
-      detail::Moments moments;
-      for (const std::uint32_t index : element.point_indices) moments.add(points.col(index));
-      Eigen::Vector3d normal = detail::principal_axes(moments.covariance()).vectors.col(0);
-      if (normal.dot(up) < 0) normal = -normal;
-      result.has_ground = true;
-      result.ground_normal = normal;
-      result.ground_offset = -normal.dot(moments.mean());
-      std::rotate(elements.begin(), elements.begin() + ground, elements.begin() + ground + 1);
-    }
-  }
+  std::vector<Element> elements = elements_of_shapes(shapes, input.size(), representative_of_point);
+  if (shape_options.mark_ground) mark_ground_element(shapes, points, options.up, elements, result);
   elements.erase(std::remove_if(elements.begin(), elements.end(), [](const Element& e) { return e.point_indices.empty(); }),
                  elements.end());
   result.elements = std::move(elements);

@@ -6,6 +6,7 @@
 
 #include "fitting/statistical_fitter.h"
 #include "fitting/taubin_fitter.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <ceres/ceres.h>
@@ -27,7 +28,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// Canonical parameters of a candidate surface in unit space (conventions of Quadric::from_canonical).
 struct CanonicalShape {

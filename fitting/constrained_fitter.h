@@ -1,4 +1,4 @@
-// Type-constrained geometric quadric fits (issue 5, `constrained`): for a requested type, the
+// Type-constrained geometric quadric fits (`constrained`): for a requested type, the
 // canonical parameters (scale, rotation, centre of paper Eq. (Q=PCP)) that minimise the sum of
 // squared TRUE orthogonal point-to-surface distances, solved with Ceres; the quadric is then
 // built with Quadric::from_canonical so its type is exact by construction.

@@ -3,6 +3,7 @@
 // over patches in the spirit of TRAVEL's traversable-ground graph). See GroundOptions for the steps.
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
+#include "geometry/constants.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +12,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 struct Patch {
   std::vector<std::uint32_t> members;        // candidate points in the patch

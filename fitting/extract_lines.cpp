@@ -6,6 +6,7 @@
 // pole's and runs out of the top of the scanner's view is a trunk whose crown was not seen.
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
+#include "geometry/constants.h"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +16,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kRadiansPerDegree = kPi / 180.0;
 
 struct LineModel {

@@ -4,6 +4,7 @@
 // G3Reg). The alternative is CGAL's region growing on the point set (cgal_shape_detection.cpp).
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
+#include "geometry/constants.h"
 
 #include <algorithm>
 #include <cmath>
@@ -110,7 +111,7 @@ bool encloses_a_solid(const Eigen::Matrix3Xd& points, const std::vector<std::uin
       behind += offset < -distance;
     }
     if (static_cast<double>(std::min(in_front, behind)) > tolerance) return false;
-    has_roof = has_roof || std::abs(normal.dot(up)) > std::cos(30.0 * 3.14159265358979323846 / 180.0);
+    has_roof = has_roof || std::abs(normal.dot(up)) > std::cos(30.0 * kPi / 180.0);
   }
   return has_roof;
 }
@@ -136,7 +137,7 @@ std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& p
     detail::Moments moments;
     for (const std::uint32_t index : plane) moments.add(points.col(index));
     const bool upright = std::abs(detail::principal_axes(moments.covariance()).vectors.col(0).dot(up.normalized())) <
-                         std::sin(options.cluster_plane_tilt_deg * 3.14159265358979323846 / 180.0);
+                         std::sin(options.cluster_plane_tilt_deg * kPi / 180.0);
     if (!upright && !detail::plane_is_large_enough(moments, static_cast<std::size_t>(options.minimum_plane_voxels), options)) break;
     std::vector<std::uint32_t> left;
     std::set_difference(rest.begin(), rest.end(), plane.begin(), plane.end(), std::back_inserter(left));

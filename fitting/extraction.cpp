@@ -39,10 +39,9 @@ ExtractionOptions extraction_preset(const std::string& name) {
     return options;
   }
   // Non-repetitive scanners see a wall as a dense patch, not the narrow band of beams a spinning
-  // head leaves, so walls inside a cluster take the full plane size tests. (Measured: with the
-  // smaller ones, the 3DTK pairs, which `auto` gives this preset, lose 2->1: 0.17 m -> 1.9 m.)
-  // The trunk rule was built and checked on spinning heads only; on the Avia demo pair it moves the
-  // answer 10 deg away from where FGR and RANSAC agree (overlap 0.29 -> 0.08), so it stays off.
+  // head leaves, so walls inside a cluster take the full plane size tests (with the smaller ones
+  // the 3DTK pair 2->1, which `auto` gives this preset, fails). The trunk rule is tuned for spinning
+  // heads only; on the Avia demo pair it turns the answer wrong, so it stays off.
   const auto full_cluster_wall_tests = [](ExtractionOptions& non_repetitive) {
     non_repetitive.planes.cluster_plane_width = non_repetitive.planes.minimum_plane_width;
     non_repetitive.planes.cluster_plane_area = non_repetitive.planes.minimum_plane_area;

@@ -119,12 +119,10 @@ struct LineOptions {
 /// a Vegetation element (the crown, an ellipsoid). Lamp posts (arm and lamp are thin) and sign
 /// posts (the sign is flat) keep their line. A line whose stem is clearly thicker than a pole and is
 /// cut by the top of the scanner's view is a Trunk element too: its crown is above the top beam.
-/// `enabled` switches both rules. The 0.11 m radius was picked from measured stems (vlp64 preset,
-/// stem_radius_across_view): in KITTI 00 frames 0-5 and 4438 the poles measure 0.02-0.05 m, the
-/// other line stems (a pedestrian among them) at most 0.081 m, and the trunks 0.114-0.275 m (one
-/// of 0.148 m under a crown in view stays a line); on the synthetic street (HDL-64E, seeds 1-10)
-/// lamp posts (true radius 0.06-0.10 m) measure at most 0.088 m and trunks (0.12-0.25 m)
-/// 0.112-0.214 m. Stems farther than about 25 m are too sparse to measure.
+/// `enabled` switches both rules. The 0.11 m radius separates the stems measured by
+/// stem_radius_across_view (vlp64 preset): in KITTI 00 frames 0-5 and 4438 non-trunk stems reach
+/// 0.081 m and trunks start at 0.114 m; on the synthetic street (seeds 1-10) lamp posts reach
+/// 0.088 m and trunks start at 0.112 m. Stems farther than about 25 m are too sparse to measure.
 struct TrunkOptions {
   bool enabled = true;                 ///< look for a trunk in every cluster before its lines (off in the mid360/avia presets)
   double slice_height = 0.25;          ///< the stem is grown upward from the cluster's foot in slices this tall, m

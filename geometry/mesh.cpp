@@ -2,6 +2,7 @@
 // P_q * canonical), clipped to a LocalExtent. Every surface type is a set of parametric patches.
 #include "geometry/mesh.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <algorithm>
@@ -12,7 +13,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// One parametric patch of a canonical surface: map(u, v) for u in [u0, u1], v in [v0, v1].
 struct Patch {

@@ -111,7 +111,6 @@ class SharedCache {
 struct CachedModel {
   ModellingResult modelling;  // the model with its elements (augment_other_side needs them)
   double modelling_ms = 0.0;
-  long long bytes = 0;
 };
 
 struct Task {
@@ -192,7 +191,6 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
     const Clock::time_point start = Clock::now();
     cached.modelling = model_scene(cloud, extraction, modelling);
     cached.modelling_ms = elapsed_ms(start);
-    cached.bytes = static_cast<long long>(scene_model_to_binary(cached.modelling.model).size());
     return cached;
   };
   std::shared_ptr<const CachedModel> source_model;
@@ -209,47 +207,30 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   }
   std::shared_ptr<const CachedModel> target_model = context.models.get(
       model_key(pair.target, "target"), [&] { return build(*input.target, registration.target_extraction, registration.modelling); });
-  // As register_clouds: when only one side was augmented, augment the other (per pair, not cached:
-  // the cache holds each cloud's own model).
-  if (registration.correspondences.match_augmented_points) {
-    const auto augmented = [&](const PointCloud& cloud, const CachedModel& own, const CachedModel& other) {
-      // Copy the cached model (elements included) only when it will change.
-      if (!lacks_augmentation_of(own.modelling.model, other.modelling.model)) return std::shared_ptr<const CachedModel>();
-      auto copy = std::make_shared<CachedModel>(own);
-      const Clock::time_point start = Clock::now();
-      if (!augment_other_side(cloud, copy->modelling, other.modelling, registration.modelling)) return std::shared_ptr<const CachedModel>();
-      copy->modelling_ms += elapsed_ms(start);
-      copy->bytes = static_cast<long long>(scene_model_to_binary(copy->modelling.model).size());
-      return std::shared_ptr<const CachedModel>(copy);
-    };
-    if (auto source_augmented = augmented(*input.source, *source_model, *target_model))
-      source_model = source_augmented;
-    else if (auto target_augmented = augmented(*input.target, *target_model, *source_model))
-      target_model = target_augmented;
-  }
-  const SceneModel source = apply_model_ablation(context.options->ablation, source_model->modelling.model);
-  const SceneModel target = apply_model_ablation(context.options->ablation, target_model->modelling.model);
-
-  RegistrationResult result = register_models(source, target, registration);
-  // As register_clouds; a perturbed source's sensor sits at the perturbation's origin (its range crop).
-  RegistrationOptions verification = registration;
-  if (perturbed) verification.source_extraction.sensor_origin = input.perturbation * registration.source_extraction.sensor_origin;
-  verify_registration(result, *input.source, *input.target, verification);
+  // The same pipeline as register_clouds from here on, with the cached models. A perturbed source's
+  // sensor sits at the perturbation's origin: its range crop in the verification follows it.
+  RegistrationOptions pipeline = registration;
+  if (perturbed) pipeline.source_extraction.sensor_origin = input.perturbation * registration.source_extraction.sensor_origin;
+  const std::string& ablation = context.options->ablation;
+  const RegistrationResult result = register_modelled_clouds(
+      {input.source, &source_model->modelling, source_model->modelling_ms},
+      {input.target, &target_model->modelling, target_model->modelling_ms}, pipeline,
+      [&ablation](const SceneModel& model) { return apply_model_ablation(ablation, model); });
   BenchMethodOutput output;
   output.transform = result.transform;
   output.status = registration_status_name(result.status);
   output.message = result.message;
   output.timings_ms = result.timings_ms;
-  output.timings_ms["modelling_source"] = source_model->modelling_ms;
-  output.timings_ms["modelling_target"] = target_model->modelling_ms;
-  output.timings_ms["total"] = result.timings_ms.at("total") + source_model->modelling_ms + target_model->modelling_ms;
-  row.source_model_bytes = source_model->bytes;
-  row.target_model_bytes = target_model->bytes;
+  // Bytes of the models as registered (after augmentation and any model-level ablation).
+  row.source_model_bytes = static_cast<long long>(scene_model_to_binary(result.source_model).size());
+  row.target_model_bytes = static_cast<long long>(scene_model_to_binary(result.target_model).size());
   row.correspondences = static_cast<long long>(result.counts.correspondences);
   if (pair.ground_truth) {
     const Eigen::Isometry3d truth = *pair.ground_truth * input.perturbation.inverse();
-    const CorrespondenceSet set = establish_correspondences(source, target, registration.correspondences);
-    const CorrespondenceQuality quality = evaluate_correspondences(source, target, set.correspondences, truth);
+    const CorrespondenceSet set =
+        establish_correspondences(result.source_model, result.target_model, registration.correspondences);
+    const CorrespondenceQuality quality =
+        evaluate_correspondences(result.source_model, result.target_model, set.correspondences, truth);
     row.inliers = static_cast<long long>(quality.inliers);
     row.recalled = quality.recalled ? 1 : 0;
   }

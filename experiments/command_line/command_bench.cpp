@@ -1,4 +1,4 @@
-// `quadrix bench`: the benchmark harness (issue 9). Pairs come from a pairs.tsv file (--pairs), a
+// `quadrix bench`: the benchmark harness. Pairs come from a pairs.tsv file (--pairs), a
 // KITTI-layout sequence by the paper's loop-closure or odometry rule (--kitti ROOT --seq SS --mode
 // lc|odo), or the published lists (--list FILE, clouds under --kitti ROOT). Every pair is run with
 // every --method in this process, optionally under random yaw / translation trials and an

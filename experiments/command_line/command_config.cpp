@@ -1,7 +1,8 @@
-// `quadrix config [CLOUD] [--preset P|auto] [--config FILE.yaml]`: prints the
-// effective registration parameters as YAML (the schema of estimation/presets/*.yaml), so a user
+// `quadrix config [CLOUD] [--preset P|auto] [--config FILE.yaml] [--schema]`: prints the
+// effective registration parameters as YAML (every key of registration_config_keys), so a user
 // sees exactly what a preset, `auto` on their cloud, and their overrides amount to, and can save,
-// edit and pass the result back with `quadrix register --config`.
+// edit and pass the result back with `quadrix register --config`; --schema prints the keys with
+// their types and descriptions instead.
 #include "experiments/command_line/command_registry.h"
 #include "estimation/registration_config.h"
 #include "geometry/error.h"
@@ -19,9 +20,14 @@ struct ConfigCommandOptions {
   std::string cloud;            ///< cloud the auto preset measures (required for auto)
   std::string preset = "auto";  ///< preset name or auto
   std::string config;           ///< YAML overrides applied after the preset
+  bool schema = false;          ///< print registration_config_schema instead of a configuration
 };
 
 void run(const ConfigCommandOptions& options) {
+  if (options.schema) {
+    std::printf("%s", registration_config_schema().c_str());
+    return;
+  }
   if (options.preset == "auto" && options.cloud.empty())
     throw Error("quadrix config: --preset auto measures a cloud: give CLOUD, or name a preset with --preset");
   if (!options.config.empty() && !std::filesystem::exists(options.config))
@@ -33,8 +39,7 @@ void run(const ConfigCommandOptions& options) {
   std::printf("# quadrix config: preset %s%s%s\n", registration.source_extraction.preset.c_str(),
               options.cloud.empty() ? "" : " for ", options.cloud.c_str());
   if (!notes.empty()) std::printf("# %s\n", notes.c_str());
-  std::printf("sensor: %s\n%s", registration.source_extraction.preset.c_str(),
-              registration_config_yaml(registration).c_str());
+  std::printf("%s", registration_config_yaml(registration).c_str());
 }
 
 const CommandRegistration registration(55, [](CLI::App& app) {
@@ -46,6 +51,7 @@ const CommandRegistration registration(55, [](CLI::App& app) {
   for (const auto& name : registration_preset_names()) presets += name + "|";
   command->add_option("--preset", options->preset, "Sensor preset: " + presets + "auto")->capture_default_str();
   command->add_option("--config", options->config, "YAML overrides applied after the preset");
+  command->add_flag("--schema", options->schema, "Print every configuration key with its type and description");
   command->callback([options] { run(*options); });
 });
 

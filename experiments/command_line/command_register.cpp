@@ -125,7 +125,7 @@ const CommandRegistration registration(60, [](CLI::App& app) {
       ->capture_default_str();
   command->add_option("--source-preset", options->source_preset, "Preset of the source only (cross-sensor pairs)");
   command->add_option("--target-preset", options->target_preset, "Preset of the target only (cross-sensor pairs)");
-  command->add_option("--config", options->config, "YAML overrides (schema: estimation/presets/*.yaml); unknown keys are errors");
+  command->add_option("--config", options->config, "YAML overrides (keys: quadrix config --schema); unknown keys are errors");
   command->add_option("--labels-source", options->labels_source, "SemanticKITTI .label file of the source");
   command->add_option("--labels-target", options->labels_target, "SemanticKITTI .label file of the target");
   command->add_option("--gt", options->ground_truth, "Ground-truth 4x4 (maps source into target): print RTE/RRE/success");

@@ -1,6 +1,6 @@
 // Estimation kernels: refining one candidate with ~100 correspondences (plus augmentation) per
 // backend/algorithm, the quadric distance + Jacobian, and scoring 8 candidates in selection.
-// Issue 7 target: Ceres refinement of ~100 correspondences in <= 2 ms.
+// Target: Ceres refinement of ~100 correspondences in <= 2 ms.
 #include "estimation/candidate_selection.h"
 #include "estimation/refiner.h"
 

@@ -1,4 +1,4 @@
-// Time per fit of every registered fitter (issue 5 figures: statistical <= 50 us and taubin <= 1 ms
+// Time per fit of every registered fitter (targets: statistical <= 50 us and taubin <= 1 ms
 // on 10k points; constrained and cgal per type). Segments come from the study's generator
 // (full surfaces, 1 cm noise, fixed seeds). Every benchmark name says how the fit's residual
 // statistics were evaluated (evaluate_fit): skip (the fit alone, as scene modelling runs it),

@@ -1,4 +1,4 @@
-// Speed of the learned fitter (issue 5 figure: <= 20 ms per segment): the whole fit of one segment
+// Speed of the learned fitter (target: <= 20 ms per segment): the whole fit of one segment
 // per type (sampling, normalisation, Eigen PointNet inference, decoding, Q = P^-T C P^-1 and the
 // shared residual evaluation with exact orthogonal distances on every point, the default; the counter
 // residual_points says so), the network forward pass alone, and the auto policy.

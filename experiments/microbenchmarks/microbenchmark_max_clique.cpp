@@ -1,4 +1,4 @@
-// Maximum-clique benchmarks (issue 6 figures; paper §"Graph-based Outlier Pruning"):
+// Maximum-clique benchmarks (paper §"Graph-based Outlier Pruning"):
 //  * random geometric graphs of 500 / 1,500 / 4,000 vertices at densities 1–30%, our solver
 //    (1 and 2 threads) against igraph's igraph_clique_number on the same graphs;
 //  * the four-level compatibility graphs of a planted-inlier correspondence set (1,500
@@ -359,7 +359,7 @@ void kitti_arguments(benchmark::internal::Benchmark* benchmark) {
   benchmark->ArgName("pair");
 }
 
-/// All four levels of a KITTI pair with our graduated solver (issue 6 figure: <= 20 ms).
+/// All four levels of a KITTI pair with our graduated solver (target: <= 20 ms).
 void BM_Kitti_Graduated_Ours(benchmark::State& state) {
   const std::size_t pair_index = static_cast<std::size_t>(state.range(0));
   const KittiGraphs& kitti = kitti_graphs(pair_index);

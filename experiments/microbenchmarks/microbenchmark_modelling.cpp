@@ -1,4 +1,4 @@
-// Scene modelling benchmarks (issue 4): a 124,668-point KITTI frame -> SceneModel (target <= 150 ms
+// Scene modelling benchmarks: a 124,668-point KITTI frame -> SceneModel (target <= 150 ms
 // on the 2-core machine) and each of its stages, and the ~6 M-point synthetic monument from 6 TLS
 // stations (target <= 30 s). Stage timings inside a run are also reported as counters (ms).
 #include "experiments/studies/modelling_evaluation.h"

@@ -1,4 +1,4 @@
-// Scanner simulator benchmarks (issue 3): one HDL-64E sweep of `street` (~120k points, target
+// Scanner simulator benchmarks: one HDL-64E sweep of `street` (~120k points, target
 // <= 100 ms on the 2-core machine) and the monument from 6 TLS stations (~6 M points, target
 // <= 15 s), plus the hierarchy build and single-ray casts for context.
 #include "experiments/synthetic/mesh_ray_caster.h"
@@ -70,7 +70,7 @@ void BM_SingleRayHierarchyVersusBruteForce(benchmark::State& state) {
 }
 BENCHMARK(BM_SingleRayHierarchyVersusBruteForce)->Arg(0)->Arg(1)->Unit(benchmark::kNanosecond);
 
-// Occlusion model choice of issue 3: every ray of one HDL-64E sweep of `street` through the exact
+// Occlusion model choice (exact casting or meshes): every ray of one HDL-64E sweep of `street` through the exact
 // ray-quadric caster (arg 0) or CGAL's AABB tree on the meshed primitives (arg 1, resolution 64).
 void BM_StreetHdl64RaysExactVersusMesh(benchmark::State& state) {
   const bool mesh = state.range(0) != 0;

@@ -1,6 +1,7 @@
 // Z-buffer rasteriser for model pictures (see model_picture.h).
 #include "experiments/reports/model_picture.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 
@@ -19,7 +20,6 @@ namespace quadrix {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 void check_range(const char* name, double value, double minimum, double maximum) {
   if (!(value >= minimum && value <= maximum))

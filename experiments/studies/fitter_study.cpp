@@ -4,6 +4,7 @@
 
 #include "experiments/studies/study_report.h"
 #include "fitting/extraction.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 
@@ -31,7 +32,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// splitmix64: derives independent seeds from the base seed and a cell's coordinates.

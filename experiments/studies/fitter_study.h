@@ -1,4 +1,4 @@
-// The fitter study (issue 5, `quadrix compare-fitters`): every registered QuadricFitter on synthetic
+// The fitter study (`quadrix compare-fitters`): every registered QuadricFitter on synthetic
 // segments of known type, scale and pose (type x noise x visible fraction x outliers x trials, fixed
 // seeds) and on real segments cropped from ../shared/data, measured by type accuracy, scale, axis and
 // centre error, point-to-surface residual and time per fit (paper §"Quadric Fitting"). Writes a CSV
@@ -50,9 +50,9 @@ struct FitterStudyOptions {
   std::vector<QuadricType> types = {QuadricType::Plane, QuadricType::Line, QuadricType::Sphere, QuadricType::Ellipsoid,
                                     QuadricType::CircularCylinder, QuadricType::EllipticCylinder,
                                     QuadricType::CircularCone};          ///< synthetic types
-  std::vector<double> noise_levels = {0.0, 0.01, 0.02, 0.05};            ///< Gaussian sigma, metres (issue 5: 0/1/2/5 cm)
-  std::vector<double> visible_fractions = {0.1, 0.25, 0.5, 1.0};         ///< observed part of the surface (issue 5: 10/25/50/100%)
-  std::vector<double> outlier_fractions = {0.0, 0.1, 0.3};               ///< outlier share (issue 5: 0/10/30%)
+  std::vector<double> noise_levels = {0.0, 0.01, 0.02, 0.05};            ///< Gaussian sigma, metres (0/1/2/5 cm)
+  std::vector<double> visible_fractions = {0.1, 0.25, 0.5, 1.0};         ///< observed part of the surface (10/25/50/100%)
+  std::vector<double> outlier_fractions = {0.0, 0.1, 0.3};               ///< outlier share (0/10/30%)
   std::vector<std::string> fitters;                                      ///< registry names; empty = quadric_fitter_names()
   int trials = 1;                                                        ///< segments per grid cell (seeds differ per trial); 1 keeps the default run near 3 minutes on 2 cores
   int points_per_segment = 400;                                          ///< points in each synthetic segment

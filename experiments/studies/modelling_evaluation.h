@@ -1,4 +1,4 @@
-// Scoring a modelling run against a synthetic scene's ground truth (issue 4 acceptance): which true
+// Scoring a modelling run against a synthetic scene's ground truth (modelling acceptance): which true
 // primitives were recovered as elements, whether their fitted type is right, and how far the fitted
 // centre is on the axes that define it.
 #pragma once

@@ -9,6 +9,7 @@
 #include "experiments/studies/study_report.h"
 #include "experiments/synthetic/synthetic_scene.h"
 #include "fitting/scene_modelling.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 #include "matching/max_clique.h"
@@ -37,7 +38,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInlierDistance = 0.5;  // correspondence inlier under the ground truth (paper: 0.5 m)
 
@@ -62,7 +62,7 @@ Eigen::Vector3d unit_vector(PortableRandom& random) {
   return v.normalized();
 }
 
-/// A start whose RTE and RRE against `truth` are exactly the drawn magnitudes (issue: 0.5-5 m, 2-20 deg).
+/// A start whose RTE and RRE against `truth` are exactly the drawn magnitudes (default 0.5-5 m, 2-20 deg).
 Eigen::Isometry3d perturbed_start(const Eigen::Isometry3d& truth, const RefinerStudyOptions& options, PortableRandom& random) {
   const double translation = random.uniform(options.minimum_translation, options.maximum_translation);
   const double angle = random.uniform(options.minimum_rotation_degrees, options.maximum_rotation_degrees) * kPi / 180.0;
@@ -388,7 +388,7 @@ RefinerStudyResult run_refiner_study(const RefinerStudyOptions& options, const R
     if (!std::filesystem::exists(table)) {
       result.notes.push_back("real pairs skipped: " + table.string() + " is absent");
     } else {
-      const RegistrationOptions registration = load_registration_preset(options.real_preset);
+      const RegistrationOptions registration = registration_preset(options.real_preset);
       std::map<std::string, SceneModel> models;
       std::size_t used = 0;
       const std::vector<PairRow> rows = read_pairs_table(table.string());

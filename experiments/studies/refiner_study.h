@@ -1,4 +1,4 @@
-// The refiner study (issue 7, `quadrix compare-refiners`): every registered refinement backend x
+// The refiner study (`quadrix compare-refiners`): every registered refinement backend x
 // algorithm x robust loss minimises the same objective (paper Eq. (quadrics distance), Algorithm 1
 // LMOptimizer; estimation/refiner.h) from perturbed starts, on
 //   - the synthetic monument and street (experiments/synthetic/synthetic_scene.h): ground-truth quadric
@@ -56,16 +56,16 @@ struct RefinerStudyOptions {
   std::vector<std::string> scenes = {"monument", "street"};     ///< synthetic scenes (experiments/synthetic/synthetic_scene.h names)
   std::vector<std::string> backends;                            ///< registry names; empty = every registered refiner
   std::vector<RobustLoss> losses = {RobustLoss::None, RobustLoss::Huber, RobustLoss::Cauchy, RobustLoss::Dcs};  ///< kernels
-  std::vector<double> outlier_fractions = {0.0, 0.1, 0.25, 0.5};  ///< share of wrong synthetic correspondences (issue: 0-50%)
+  std::vector<double> outlier_fractions = {0.0, 0.1, 0.25, 0.5};  ///< share of wrong synthetic correspondences
   std::vector<AttributeNoise> noise_levels = {{0.0, 0.0, 0.0}, {0.02, 0.5, 0.05}};  ///< synthetic target attribute noise levels
   int trials = 10;                          ///< perturbed starts per synthetic cell and per real correspondence set
   double minimum_translation = 0.5;         ///< start perturbation: translation drawn uniformly in [min, max], metres
-  double maximum_translation = 5.0;         ///< (issue: 0.5-5 m)
+  double maximum_translation = 5.0;         ///< upper end of that translation range, metres
   double minimum_rotation_degrees = 2.0;    ///< start perturbation: rotation angle drawn uniformly in [min, max], degrees
-  double maximum_rotation_degrees = 20.0;   ///< (issue: 2-20 deg)
+  double maximum_rotation_degrees = 20.0;   ///< upper end of that rotation range, degrees
   double loss_scale = 0.5;                  ///< a of Huber/Cauchy, Phi of DCS, units of ||e|| (metres / unit-vector length)
-  double converged_translation = 0.01;      ///< converged: final pose within this of the criterion pose, metres (issue: 1 cm)
-  double converged_rotation_degrees = 0.05; ///< and within this angle, degrees (issue: 0.05 deg)
+  double converged_translation = 0.01;      ///< converged: final pose within this of the criterion pose, metres
+  double converged_rotation_degrees = 0.05; ///< and within this angle, degrees
   std::size_t max_synthetic_elements = 120; ///< a synthetic problem uses at most this many primitives (a random subset per trial)
   bool augment_non_central = true;          ///< Augment() of Algorithm 1 on linear / planar centres (as the pipeline)
   std::uint64_t seed = 20241122;            ///< base seed; every problem and start derives from it

@@ -1,5 +1,5 @@
-// The alternative occlusion model of the scanner simulator (issue 3: "exact ray–quadric
-// intersection within bounds, or CGAL's AABB tree on meshes — measure which is faster"): every
+// The alternative occlusion model of the scanner simulator (CGAL's AABB tree on meshes instead of
+// exact ray–quadric intersection within bounds, kept to measure which is faster): every
 // bounded primitive meshed (mesh_surface) into one CGAL AABB tree of triangles, first hit per
 // ray. The exact RayCaster stays the simulator's caster; this one exists to measure the choice
 // (microbenchmark_simulator) and to cross-check hits (tests). CGAL stays in the .cpp.

@@ -2,6 +2,7 @@
 // volume hierarchy, and the parallel scan loop.
 #include "experiments/synthetic/scanner_simulator.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <tbb/blocked_range.h>
@@ -35,7 +36,7 @@ int dome_columns(const SensorModel& sensor) {
 }
 
 Eigen::Vector3d direction_from_angles(double azimuth_deg, double elevation_deg) {
-  const double azimuth = azimuth_deg * M_PI / 180.0, elevation = elevation_deg * M_PI / 180.0;
+  const double azimuth = azimuth_deg * kPi / 180.0, elevation = elevation_deg * kPi / 180.0;
   return {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};
 }
 
@@ -147,9 +148,9 @@ std::vector<Eigen::Vector3d> sensor_ray_directions(const SensorModel& sensor) {
       for (int sample = 0; sample < sensor.rosette_samples; ++sample) {
         const int beam = sample % sensor.rosette_beams;
         const double time = sensor.rosette_frame_seconds * (sample / sensor.rosette_beams) / per_beam;
-        const double phase1 = 2.0 * M_PI * (sensor.rosette_prism_frequency_1_hz * time +
+        const double phase1 = 2.0 * kPi * (sensor.rosette_prism_frequency_1_hz * time +
                                             static_cast<double>(beam) / sensor.rosette_beams);
-        const double phase2 = 2.0 * M_PI * sensor.rosette_prism_frequency_2_hz * time;
+        const double phase2 = 2.0 * kPi * sensor.rosette_prism_frequency_2_hz * time;
         const double azimuth = half_deflection * (std::cos(phase1) + std::cos(phase2));
         const double elevation = half_deflection * (std::sin(phase1) + std::sin(phase2));
         directions.push_back(direction_from_angles(azimuth, elevation));
@@ -512,7 +513,7 @@ SimulatedScan simulate_scan(const Scene& scene, const RayCaster& caster, const S
       if (sensor.range_noise_sigma > 0.0) {
         const double u1 = 1.0 - unit_interval_from_bits(mix_bits(key + 1));
         const double u2 = unit_interval_from_bits(mix_bits(key + 2));
-        noise = sensor.range_noise_sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+        noise = sensor.range_noise_sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
       }
       result.outcome = RayOutcome::Return;
       result.primitive = hit.primitive;

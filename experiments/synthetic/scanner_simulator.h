@@ -1,4 +1,4 @@
-// Scanner simulator (issue 3): spinning LiDARs (HDL-64E, VLP-16), a Livox-like non-repetitive
+// Scanner simulator: spinning LiDARs (HDL-64E, VLP-16), a Livox-like non-repetitive
 // rosette, and a terrestrial laser scanner, ray-cast exactly against the bounded quadric primitives
 // of a synthetic scene (ray-plane, ray-cylinder, ray-ellipsoid, ray-cone in each primitive's
 // canonical frame) with a bounding-volume hierarchy as broad phase. Rays run in parallel (TBB);

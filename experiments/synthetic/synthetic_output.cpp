@@ -1,6 +1,7 @@
 // Pose specifications, simulation runs over several poses, and the `quadrix synth` output folder.
 #include "experiments/synthetic/synthetic_output.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <nlohmann/json.hpp>
@@ -53,7 +54,7 @@ std::string fixed(double value, int decimals) {
 }
 
 Eigen::Isometry3d pose_from_angles(const std::vector<double>& values) {
-  const double to_radians = M_PI / 180.0;
+  const double to_radians = kPi / 180.0;
   const double yaw = values[3] * to_radians;
   const double pitch = values.size() > 4 ? values[4] * to_radians : 0.0;
   const double roll = values.size() > 5 ? values[5] * to_radians : 0.0;
@@ -284,7 +285,7 @@ std::vector<std::string> write_synthetic_folder(const std::string& directory, co
                    std::to_string(target) + " (target): p_target = R p_source + t");
       const double translation = transform.translation().norm();
       const double cosine = std::clamp((transform.linear().trace() - 1.0) / 2.0, -1.0, 1.0);
-      const double rotation_deg = std::acos(cosine) * 180.0 / M_PI;
+      const double rotation_deg = std::acos(cosine) * 180.0 / kPi;
       const std::string source_cloud = "scan_" + three_digits(source) + extension;
       const std::string target_cloud = "scan_" + three_digits(target) + extension;
       pairs.push_back({{"source", source_cloud},

@@ -2,6 +2,7 @@
 // the ground truth (quadrics and 21-number records) of every primitive.
 #include "experiments/synthetic/synthetic_scene.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <algorithm>
@@ -73,7 +74,7 @@ double PortableRandom::normal(double mean, double standard_deviation) {
   // Box-Muller; 1 - u keeps the logarithm finite.
   const double u1 = 1.0 - unit_interval_from_bits(engine_());
   const double u2 = unit_interval_from_bits(engine_());
-  return mean + standard_deviation * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+  return mean + standard_deviation * std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
 }
 
 std::uint64_t mix_bits(std::uint64_t value) {
@@ -90,7 +91,7 @@ double unit_interval_from_bits(std::uint64_t bits) { return static_cast<double>(
 
 namespace {
 
-double degrees(double value) { return value * M_PI / 180.0; }
+double degrees(double value) { return value * kPi / 180.0; }
 
 /// Orthonormal right-handed basis whose third column is `axis`.
 Eigen::Matrix3d basis_with_third_axis(const Eigen::Vector3d& axis) {
@@ -119,14 +120,14 @@ bool is_ellipsoid(QuadricType type) { return type == QuadricType::Sphere || type
 
 /// Ramanujan's approximation of an ellipse perimeter.
 double ellipse_perimeter(double a, double b) {
-  return M_PI * (3.0 * (a + b) - std::sqrt((3.0 * a + b) * (a + 3.0 * b)));
+  return kPi * (3.0 * (a + b) - std::sqrt((3.0 * a + b) * (a + 3.0 * b)));
 }
 
 /// Area of a full ellipsoid (Knud Thomsen's approximation, exact for spheres).
 double ellipsoid_area(const Eigen::Vector3d& s) {
   const double p = 1.6075;
   const double ab = std::pow(s.x() * s.y(), p), ac = std::pow(s.x() * s.z(), p), bc = std::pow(s.y() * s.z(), p);
-  return 4.0 * M_PI * std::pow((ab + ac + bc) / 3.0, 1.0 / p);
+  return 4.0 * kPi * std::pow((ab + ac + bc) / 3.0, 1.0 / p);
 }
 
 double polygon_area(const std::vector<Eigen::Vector2d>& polygon) {
@@ -141,7 +142,7 @@ double polygon_area(const std::vector<Eigen::Vector2d>& polygon) {
 
 /// Unit-sphere Fibonacci points (deterministic, nearly uniform).
 Eigen::Vector3d fibonacci_direction(int index, int count) {
-  const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
+  const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
   const double z = 1.0 - (2.0 * index + 1.0) / count;
   const double radius = std::sqrt(std::max(0.0, 1.0 - z * z));
   const double angle = golden_angle * index;
@@ -167,7 +168,7 @@ std::vector<Eigen::Vector3d> local_samples(const ScenePrimitive& primitive, doub
     const int nt = std::max(8, static_cast<int>(std::ceil(ellipse_perimeter(s.x(), s.y()) / spacing)));
     const int nc = std::max(1, static_cast<int>(std::ceil((e.maximum.z() - e.minimum.z()) / spacing)));
     for (int i = 0; i < nt; ++i) {
-      const double angle = 2.0 * M_PI * (i + 0.5) / nt;
+      const double angle = 2.0 * kPi * (i + 0.5) / nt;
       for (int j = 0; j < nc; ++j) {
         const Eigen::Vector3d p(s.x() * std::cos(angle), s.y() * std::sin(angle),
                                 e.minimum.z() + (j + 0.5) * (e.maximum.z() - e.minimum.z()) / nc);
@@ -190,7 +191,7 @@ std::vector<Eigen::Vector3d> local_samples(const ScenePrimitive& primitive, doub
       const double perimeter = ellipse_perimeter(s.x() * std::abs(c), s.y() * std::abs(c));
       const int nt = std::max(6, static_cast<int>(std::ceil(perimeter / spacing)));
       for (int i = 0; i < nt; ++i) {
-        const double angle = 2.0 * M_PI * (i + 0.5) / nt;
+        const double angle = 2.0 * kPi * (i + 0.5) / nt;
         const Eigen::Vector3d p(s.x() * std::abs(c) * std::cos(angle), s.y() * std::abs(c) * std::sin(angle), c);
         if (inside_primitive_bounds(primitive, p)) points.push_back(p);
       }
@@ -582,7 +583,7 @@ Scene make_street_scene(std::uint64_t seed) {
                          Eigen::Vector3d(tree_x, tree_y, tree_base), Eigen::Vector3d::UnitZ(), trunk_radius,
                          crown_center - tree_base);
         builder.ellipsoid(numbered("tree_crown", tree_count), SemanticLabel::Vegetation,
-                          Eigen::Vector3d(tree_x, tree_y, crown_center), yaw_rotation(random.uniform(0.0, M_PI)),
+                          Eigen::Vector3d(tree_x, tree_y, crown_center), yaw_rotation(random.uniform(0.0, kPi)),
                           crown_radii, -crown_radii.z(), crown_radii.z());
         ++tree_count;
       }
@@ -831,7 +832,7 @@ Scene make_monument_scene(std::uint64_t seed) {
       builder.cylinder(numbered("portico_column", column++), SemanticLabel::Column, QuadricType::CircularCylinder,
                        Eigen::Vector3d(x, y, podium), up, column_radius, column_top - podium);
   for (int i = 0; i < 16; ++i) {  // interior ring, clear of the door axis
-    const double angle = (i + 0.5) * 2.0 * M_PI / 16.0;
+    const double angle = (i + 0.5) * 2.0 * kPi / 16.0;
     builder.cylinder(numbered("interior_column", i), SemanticLabel::Column, QuadricType::CircularCylinder,
                      Eigen::Vector3d(19.0 * std::cos(angle), 19.0 * std::sin(angle), 0.0), up, 0.55, 12.0);
   }

@@ -1,4 +1,4 @@
-// Synthetic scenes with known ground truth (issue 3): every scene is a list of bounded quadric
+// Synthetic scenes with known ground truth: every scene is a list of bounded quadric
 // primitives with semantic labels, so the scanner simulator (experiments/synthetic/scanner_simulator.h) can
 // ray-cast them and every later stage (extraction, fitting, matching, registration) can be scored
 // against the true primitives and the true sensor poses.

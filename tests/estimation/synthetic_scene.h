@@ -4,8 +4,10 @@
 #pragma once
 
 #include "estimation/quadric_distance.h"
+#include "geometry/constants.h"
 #include "geometry/quadric.h"
 #include "geometry/quadric_record.h"
+#include "test_geometry.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -27,26 +29,10 @@ inline const std::vector<QuadricType>& estimation_types() {
   return types;
 }
 
-/// Uniformly random rotation (unit quaternion from a normalised Gaussian 4-vector).
-inline Eigen::Matrix3d random_rotation(std::mt19937& rng) {
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  Eigen::Quaterniond q(gauss(rng), gauss(rng), gauss(rng), gauss(rng));
-  return q.normalized().toRotationMatrix();
-}
-
 /// Uniform unit vector.
 inline Eigen::Vector3d random_unit_vector(std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, 1.0);
   return Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
-}
-
-/// Random pose: rotation uniform, translation uniform in a cube of half-side `extent`.
-inline Eigen::Isometry3d random_pose(std::mt19937& rng, double extent) {
-  std::uniform_real_distribution<double> uniform(-extent, extent);
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = random_rotation(rng);
-  pose.translation() = Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
-  return pose;
 }
 
 /// A perturbation of exactly `translation` metres and `angle_radians` about random directions.
@@ -77,7 +63,7 @@ inline std::pair<double, double> pose_error(const Eigen::Isometry3d& estimate, c
   const Eigen::Matrix3d relative = truth.linear().transpose() * estimate.linear();
   // Angle from the quaternion (atan2-based): accurate near zero, unlike acos((tr - 1) / 2).
   const double angle = Eigen::AngleAxisd(Eigen::Quaterniond(relative).normalized()).angle();
-  return {(estimate.translation() - truth.translation()).norm(), angle * 180.0 / M_PI};
+  return {(estimate.translation() - truth.translation()).norm(), angle * 180.0 / kPi};
 }
 
 /// A source/target record pair set related by `truth`.

@@ -1,6 +1,7 @@
 // Candidate selection (Algorithm 1, Optimal Transformation Selection): SNN, scores, the winner.
 #include "estimation/candidate_selection.h"
 #include "estimation/synthetic_scene.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <gtest/gtest.h>
@@ -23,7 +24,7 @@ std::vector<Eigen::Isometry3d> candidates_around(std::mt19937& rng, const Eigen:
   std::uniform_real_distribution<double> degrees(3.0, 10.0);
   std::vector<Eigen::Isometry3d> candidates;
   for (int k = 0; k < count - 1; ++k)
-    candidates.push_back(testing::perturbation(rng, translation(rng), degrees(rng) * M_PI / 180.0) * truth);
+    candidates.push_back(testing::perturbation(rng, translation(rng), degrees(rng) * kPi / 180.0) * truth);
   *truth_index = std::uniform_int_distribution<std::size_t>(0, candidates.size())(rng);
   candidates.insert(candidates.begin() + static_cast<std::ptrdiff_t>(*truth_index), truth);
   return candidates;
@@ -129,7 +130,7 @@ TEST(CandidateSelection, PicksTheTrueCandidateAmongPerturbedOnes) {
 TEST(CandidateSelection, NoisyScenesStillPreferTheTruth) {
   std::mt19937 rng(43);
   SceneSpec spec;
-  spec.rotation_noise = 0.5 * M_PI / 180.0;
+  spec.rotation_noise = 0.5 * kPi / 180.0;
   spec.translation_noise = 0.03;
   int correct = 0;
   for (int trial = 0; trial < 100; ++trial) {

@@ -4,6 +4,7 @@
 // answer stands, `ambiguous`). Scenes are sampled at random, each cloud on its own.
 #include "estimation/dense_search.h"
 #include "estimation/registration.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <gtest/gtest.h>
@@ -17,7 +18,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // A surface sampler: a uniform random point of the surface (world frame).
 using Surface = std::function<Eigen::Vector3d(std::mt19937&)>;

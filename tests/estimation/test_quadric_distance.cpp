@@ -3,6 +3,7 @@
 // the robust kernels.
 #include "estimation/quadric_distance.h"
 #include "estimation/synthetic_scene.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <gtest/gtest.h>
@@ -133,7 +134,7 @@ TEST(QuadricDistance, GroundFactorAlignsNormalsAndOffsets) {
   EXPECT_EQ(factor.weight, 2.0);
   // A rotation taking z to y plus a shift mapping z = -1.7 onto y = -1 zeroes the factor.
   Eigen::Isometry3d aligned = Eigen::Isometry3d::Identity();
-  aligned.linear() = Eigen::AngleAxisd(-M_PI / 2.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  aligned.linear() = Eigen::AngleAxisd(-kPi / 2.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
   aligned.translation() = Eigen::Vector3d(5.0, -1.0 + 1.7, 9.0);  // any in-plane shift is free
   ASSERT_LT((aligned.linear() * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitY()).norm(), 1e-12);
   EXPECT_LT(quadric_distance(factor, aligned).norm(), 1e-12);
@@ -151,8 +152,8 @@ TEST(QuadricDistance, ManhattanFilterUsesTheGivenGroundNormal) {
     pose.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), normal).toRotationMatrix();
     return Quadric::from_canonical(QuadricType::Plane, Eigen::Vector3d::Ones(), pose).decompose();
   };
-  const Eigen::AngleAxisd three_degrees(3.0 * M_PI / 180.0, Eigen::Vector3d::UnitX());
-  const Eigen::AngleAxisd thirty_degrees(30.0 * M_PI / 180.0, Eigen::Vector3d::UnitX());
+  const Eigen::AngleAxisd three_degrees(3.0 * kPi / 180.0, Eigen::Vector3d::UnitX());
+  const Eigen::AngleAxisd thirty_degrees(30.0 * kPi / 180.0, Eigen::Vector3d::UnitX());
   // Parallel (ground-like), antiparallel and perpendicular (wall) to the tilted ground are kept...
   EXPECT_TRUE(is_manhattan_aligned(plane_with_normal(three_degrees * tilted_ground), tilted_ground, 5.0));
   EXPECT_TRUE(is_manhattan_aligned(plane_with_normal(-tilted_ground), tilted_ground, 5.0));

@@ -3,6 +3,7 @@
 // the degeneracy refusal and the registry.
 #include "estimation/refiner.h"
 #include "estimation/synthetic_scene.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <gtest/gtest.h>
@@ -39,11 +40,11 @@ std::vector<QuadricFactor> factors_of(const testing::SyntheticScene& scene, bool
       .factors;
 }
 
-// Perturbs the truth by 0.5-5 m and 2-20 degrees (the issue's range).
+// Perturbs the truth by 0.5-5 m and 2-20 degrees (the refiner study's start range).
 Eigen::Isometry3d perturbed_start(std::mt19937& rng, const Eigen::Isometry3d& truth) {
   std::uniform_real_distribution<double> translation(0.5, 5.0);
   std::uniform_real_distribution<double> degrees(2.0, 20.0);
-  return testing::perturbation(rng, translation(rng), degrees(rng) * M_PI / 180.0) * truth;
+  return testing::perturbation(rng, translation(rng), degrees(rng) * kPi / 180.0) * truth;
 }
 
 struct TrialStatistics {
@@ -100,7 +101,7 @@ TEST(Refiners, RegistryKnowsBothBackendsAndRejectsUnknownNames) {
   EXPECT_THROW(make_refiner("nlopt")->refine(factors_of(scene), scene.truth, options), Error);
 }
 
-// Issue 7: from 5 m / 20 degree perturbations, noise-free, every backend reaches < 1 cm / 0.05 deg.
+// Convergence target: from 5 m / 20 degree perturbations, noise-free, every backend reaches < 1 cm / 0.05 deg.
 TEST(Refiners, EveryBackendConvergesToTheTruePoseFromPerturbedStartsWithoutNoise) {
   for (const Backend& backend : all_backends()) {
     const TrialStatistics statistics = run_trials(backend, SceneSpec{}, RefinerOptions{}, 100, 0.01, 0.05, 32);
@@ -112,7 +113,7 @@ TEST(Refiners, EveryBackendConvergesToTheTruePoseFromPerturbedStartsWithoutNoise
 
 TEST(Refiners, NoisyAttributesGiveCentimetreLevelPoses) {
   SceneSpec spec;
-  spec.rotation_noise = 0.5 * M_PI / 180.0;  // 0.5 deg per axis on every target element
+  spec.rotation_noise = 0.5 * kPi / 180.0;  // 0.5 deg per axis on every target element
   spec.translation_noise = 0.02;             // 2 cm per axis
   for (const Backend& backend : all_backends()) {
     const TrialStatistics statistics = run_trials(backend, spec, RefinerOptions{}, 100, 0.05, 0.3, 33);
@@ -126,7 +127,7 @@ TEST(Refiners, RobustLossesRejectWrongCorrespondences) {
   SceneSpec spec;
   spec.copies_per_type = 3;
   spec.outlier_fraction = 0.2;
-  spec.rotation_noise = 0.2 * M_PI / 180.0;
+  spec.rotation_noise = 0.2 * kPi / 180.0;
   spec.translation_noise = 0.01;
   // Without a robust loss the wrong correspondences pull the pose away.
   const TrialStatistics plain = run_trials({"ceres", "levenberg_marquardt"}, spec, RefinerOptions{}, 100, 0.1, 0.5, 34);
@@ -153,7 +154,7 @@ TEST(Refiners, RobustLossesRejectWrongCorrespondences) {
 TEST(Refiners, BackendsMinimiseTheSameObjective) {
   std::mt19937 rng(35);
   SceneSpec spec;
-  spec.rotation_noise = 1.0 * M_PI / 180.0;
+  spec.rotation_noise = 1.0 * kPi / 180.0;
   spec.translation_noise = 0.05;
   for (int trial = 0; trial < 20; ++trial) {
     const auto scene = make_scene(rng, spec);

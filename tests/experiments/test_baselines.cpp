@@ -1,9 +1,11 @@
-// The baseline registration methods (experiments/baselines.h): each one recovers a known rigid
+// The baseline registration methods (experiments/baselines/baselines.h): each one recovers a known rigid
 // motion of a real KITTI frame and the real loop closure 0 -> 4438 within the paper's success rule
 // (RTE <= 2 m, RRE <= 5 deg), returns the transform that maps source points into the target frame,
 // and reports bad names, bad options and empty or too sparse clouds clearly.
 #include "estimation/registration.h"
-#include "experiments/baselines.h"
+#include "experiments/baselines/baselines.h"
+#include "experiments/benchmark/baseline_process.h"
+#include "geometry/error.h"
 #include "geometry/io.h"
 #include "test_data.h"
 
@@ -161,6 +163,71 @@ TEST(Baselines, InvalidOptionThrowsNamingTheField) {
   options = BaselineOptions{};
   options.threads = 0;
   EXPECT_THROW(run_baseline("pcl-prerejective", points, points, options), std::invalid_argument);
+}
+
+TEST(BaselineProtocol, OptionsAndResultsSurviveTheirJsonForm) {
+  BaselineOptions options;
+  options.voxel_size = 0.7;
+  options.mutual_filter = false;
+  options.ransac_iterations = 1234;
+  options.seed = 7;
+  const BaselineOptions read = baseline_options_from_json(baseline_options_to_json(options));
+  EXPECT_EQ(baseline_options_to_json(read), baseline_options_to_json(options));
+  EXPECT_DOUBLE_EQ(read.voxel_size, 0.7);
+  EXPECT_FALSE(read.mutual_filter);
+  EXPECT_EQ(read.ransac_iterations, 1234);
+  EXPECT_EQ(read.seed, 7u);
+
+  BaselineResult result;
+  result.transform = known_motion();
+  result.solved = true;
+  result.message = "12 inliers";
+  result.timings_ms = {{"features", 1.25}, {"total", 3.5}};
+  result.cpu_ms = 2.0;
+  result.counts = {{"inliers", 12.0}};
+  const BaselineResult back = baseline_result_from_json(baseline_result_to_json(result));
+  EXPECT_TRUE(back.transform.isApprox(result.transform, 1e-15));
+  EXPECT_TRUE(back.solved);
+  EXPECT_EQ(back.message, result.message);
+  EXPECT_EQ(back.timings_ms, result.timings_ms);
+  EXPECT_EQ(back.counts, result.counts);
+}
+
+TEST(BaselineProtocol, UnknownOrMistypedFieldsAreErrorsNamingThem) {
+  try {
+    baseline_options_from_json("{\"voxel\": 0.5}");
+    FAIL() << "an unknown field must throw";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("'voxel'"), std::string::npos) << error.what();
+  }
+  try {
+    baseline_options_from_json("{\"threads\": \"two\"}");
+    FAIL() << "a mistyped field must throw";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("'threads'"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(baseline_result_from_json("{\"solved\": true}"), Error);
+  EXPECT_THROW(baseline_result_from_json("not json"), Error);
+}
+
+// The benchmark runs each baseline in a quadrix-baselines child process: the same answer as in process.
+TEST(BaselineProcess, GivesTheInProcessAnswerAndReportsChildErrors) {
+  QUADRIX_REQUIRE_SHARED_DATA(kSourceFrame);
+  const PointCloud source = crop(read_point_cloud(testing::shared_data_path(kSourceFrame)), 30.0f);
+  const Eigen::Isometry3d truth = known_motion();
+  const PointCloud target = moved(source, truth);
+  const BaselineOptions options = fast_options();
+  const BaselineResult child = run_baseline_process("open3d-fgr", source, target, options);
+  ASSERT_TRUE(child.solved) << child.message;
+  EXPECT_LE(translation_error(child.transform, truth), 2.0) << child.message;
+  EXPECT_LE(rotation_error_degrees(child.transform, truth), 5.0) << child.message;
+  EXPECT_GT(child.timings_ms.at("total"), 0.0);
+  try {
+    run_baseline_process("teaser", source, target, options);
+    FAIL() << "an unknown method must throw";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("teaser"), std::string::npos) << error.what();
+  }
 }
 
 }  // namespace

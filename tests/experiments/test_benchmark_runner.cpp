@@ -1,8 +1,8 @@
 // The benchmark harness: a run split in 3 shards and merged gives exactly the outputs of one run;
 // rows round-trip through CSV; pairs without ground truth are never counted; ablations are applied;
 // and on real KITTI pairs Quadrix is run through the cache with (and without) random yaw trials.
-#include "experiments/bench_paper.h"
-#include "experiments/benchmark_runner.h"
+#include "experiments/benchmark/bench_paper.h"
+#include "experiments/benchmark/benchmark_runner.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 #include "test_data.h"

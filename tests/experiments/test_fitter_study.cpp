@@ -1,7 +1,8 @@
 // The fitter study: the synthetic generator honours type, visibility, noise and outliers; a small
 // study measures what it should (exact fits have zero errors, runs are reproducible); the writers
 // produce complete CSV / Markdown / SVG files; the real segments are plausible when the data exists.
-#include "experiments/fitter_study.h"
+#include "experiments/studies/fitter_study.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "test_data.h"
 
@@ -19,7 +20,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::string read_text(const std::filesystem::path& path) {
   std::ifstream in(path);

@@ -1,14 +1,15 @@
-// Issue 4 acceptance: extraction + modelling scored against synthetic ground truth and on real
+// Modelling acceptance: extraction + modelling scored against synthetic ground truth and on real
 // KITTI frames. Street (HDL-64E): >= 90% of the true primitives with >= 200 points recovered as
-// elements (point-id majority, experiments/modelling_evaluation.h), >= 90% of them with the right
+// elements (point-id majority, experiments/studies/modelling_evaluation.h), >= 90% of them with the right
 // fitted type, median centre error on the defined axes <= 0.2 m, on seeds 1-10. The monument
 // (TLS) is in test_monument_modelling.cpp. KITTI: about 100 key elements, ground, facades as
 // vertical planes, poles as upright lines. Bad input: a valid tiny model and a status saying why.
 // A mesh picture renders where the camera looks.
-#include "experiments/model_picture.h"
-#include "experiments/modelling_evaluation.h"
-#include "experiments/scanner_simulator.h"
+#include "experiments/reports/model_picture.h"
+#include "experiments/studies/modelling_evaluation.h"
+#include "experiments/synthetic/scanner_simulator.h"
 #include "fitting/scene_modelling.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 #include "geometry/mesh.h"
@@ -25,7 +26,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 void print_failures(const ModellingEvaluation& evaluation) {
   for (const PrimitiveRecovery& p : evaluation.primitives)
@@ -62,7 +62,7 @@ TEST(ModellingAcceptance, SyntheticStreetHdl64) {
     EXPECT_LE(evaluation.median_centre_error, 0.2);
     // Type on every seed. Near the sensor the HDL-64E's top beam passes below the crowns; those
     // trunks are right because a stem thicker than a pole that runs out of the top of the view is a
-    // trunk (TrunkOptions::crownless_*). Seed 7 measured 86.7% before that rule.
+    // trunk (TrunkOptions::crownless_*).
     EXPECT_GE(evaluation.type_correct_fraction, 0.9);
   }
 }

@@ -1,13 +1,13 @@
-// Issue 4, static-scan acceptance: the synthetic Pantheon-like monument (truth: 33 cylinders, 25
+// Static-scan acceptance of scene modelling: the synthetic Pantheon-like monument (truth: 33 cylinders, 25
 // planes, 3 spheres, 1 cone) scanned from its seven TLS stations at the `tls` preset's 0.2 deg (6.2 M
-// points, the issue's "~6 M-point monument") and modelled with the `monument` preset (CGAL Efficient
+// points, the ~6 M-point monument of the acceptance target) and modelled with the `monument` preset (CGAL Efficient
 // RANSAC and the refits of fitting/cgal_shape_detection.cpp, then the preset's constrained fitter).
-// Counts are checked against the issue's criterion (each within +-15% of the truth), and what is
+// Counts are checked against the acceptance criterion (each within +-15% of the truth), and what is
 // found is checked against the truth: which primitive each element holds, its type and its centre.
 // The run takes about 30 s, so one RANSAC seed runs here; seeds 7, 11 and 13 were measured (README).
-#include "experiments/modelling_evaluation.h"
-#include "experiments/registration_config.h"
-#include "experiments/scanner_simulator.h"
+#include "experiments/studies/modelling_evaluation.h"
+#include "estimation/registration_config.h"
+#include "experiments/synthetic/scanner_simulator.h"
 #include "fitting/scene_modelling.h"
 
 #include <gtest/gtest.h>
@@ -57,7 +57,7 @@ TEST(MonumentModelling, CountsAndPrimitivesAgainstTheTruth) {
       std::cout << "  " << p.name << " (" << quadric_type_name(p.truth_type) << ", " << p.points << " pts): share "
                 << p.element_share << ", fitted " << (p.modelled ? quadric_type_name(p.fitted_type) : "-") << "\n";
 
-  // The issue's criterion: every count within +-15% of the truth.
+  // Acceptance criterion: every count within +-15% of the truth.
   EXPECT_GE(cylinders, 29);
   EXPECT_LE(cylinders, 37);
   EXPECT_GE(planes, 22);

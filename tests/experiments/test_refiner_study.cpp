@@ -1,9 +1,9 @@
-// The refiner study (issue 7): the issue's figure on the synthetic monument and street (every
+// The refiner study: the convergence target on the synthetic monument and street (every
 // backend/algorithm converges from 5 m / 20 deg starts on noise-free models without wrong
 // correspondences), a tiny study whose rows are internally consistent and reproducible, the writers,
 // bad options, and the real KITTI loop-closure problems when the data exists.
 #include "estimation/refiner.h"
-#include "experiments/refiner_study.h"
+#include "experiments/studies/refiner_study.h"
 #include "geometry/error.h"
 #include "test_data.h"
 
@@ -34,7 +34,7 @@ RefinerStudyOptions synthetic_only() {
   return options;
 }
 
-// Issue 7's figure: from 5 m / 20 degree perturbations with no wrong correspondences every backend
+// Convergence target: from 5 m / 20 degree perturbations with no wrong correspondences every backend
 // and algorithm reaches < 1 cm / 0.05 deg on the noise-free monument and street models.
 TEST(RefinerStudy, EveryBackendAndAlgorithmConvergesFromFiveMetresAndTwentyDegreesOnNoiseFreeModels) {
   RefinerStudyOptions options = synthetic_only();

@@ -1,7 +1,8 @@
-// Registration presets/config (YAML mirrors C++, unknown keys are errors naming key and file), the
-// `auto` preset on real scans, and the report files of `quadrix register --out`.
-#include "experiments/registration_config.h"
-#include "experiments/registration_report.h"
+// Registration presets and the YAML configuration (every key of the table round-trips, unknown keys
+// and bad values are errors naming key and file), the `auto` preset on real scans, and the report
+// files of `quadrix register --out`.
+#include "estimation/registration_config.h"
+#include "experiments/reports/registration_report.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 #include "test_data.h"
@@ -17,6 +18,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <type_traits>
+#include <variant>
 
 namespace quadrix {
 namespace {
@@ -33,40 +36,138 @@ std::string write_text(const std::filesystem::path& path, const std::string& tex
   return path.string();
 }
 
-TEST(RegistrationConfig, PresetFilesMirrorTheCxxPresets) {
-  for (const std::string& name : registration_preset_names()) {
-    const RegistrationOptions cxx = registration_preset(name);
-    const std::string file = registration_presets_directory() + "/" + name + ".yaml";
-    ASSERT_TRUE(std::filesystem::exists(file)) << file;
-    RegistrationOptions yaml = RegistrationOptions{};  // defaults + the file (its `sensor` restarts the extraction)
-    apply_registration_config(file, yaml);
-    for (const ExtractionOptions* side : {&yaml.source_extraction, &yaml.target_extraction}) {
-      EXPECT_EQ(side->preset, cxx.source_extraction.preset) << file;
-      EXPECT_EQ(side->static_scan, cxx.source_extraction.static_scan) << file;
-      EXPECT_DOUBLE_EQ(side->minimum_range, cxx.source_extraction.minimum_range) << file;
-      EXPECT_DOUBLE_EQ(side->maximum_range, cxx.source_extraction.maximum_range) << file;
-      EXPECT_DOUBLE_EQ(side->planes.voxel_size, cxx.source_extraction.planes.voxel_size) << file;
-      EXPECT_DOUBLE_EQ(side->planes.merge_distance, cxx.source_extraction.planes.merge_distance) << file;
-      EXPECT_DOUBLE_EQ(side->planes.normal_cosine, cxx.source_extraction.planes.normal_cosine) << file;
-      EXPECT_DOUBLE_EQ(side->planes.eigenvalue_ratio, cxx.source_extraction.planes.eigenvalue_ratio) << file;
-      EXPECT_DOUBLE_EQ(side->clusters.radius, cxx.source_extraction.clusters.radius) << file;
-      EXPECT_EQ(side->clusters.minimum_points, cxx.source_extraction.clusters.minimum_points) << file;
-      EXPECT_DOUBLE_EQ(side->planes.cluster_plane_width, cxx.source_extraction.planes.cluster_plane_width) << file;
-      EXPECT_DOUBLE_EQ(side->planes.cluster_plane_area, cxx.source_extraction.planes.cluster_plane_area) << file;
-      EXPECT_EQ(side->trunks.enabled, cxx.source_extraction.trunks.enabled) << file;
+// Sets the member of `key` (of `side` for per-side keys) to a valid value different from its
+// current one: bools flipped, numbers changed, another valid name, another list or axis.
+void change_member(const RegistrationConfigKey& key, RegistrationOptions& options, ConfigSide side) {
+  std::visit(
+      [&key](auto* value) {
+        using T = std::remove_pointer_t<decltype(value)>;
+        if constexpr (std::is_same_v<T, bool>) {
+          *value = !*value;
+        } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::size_t>) {
+          *value += 1;
+        } else if constexpr (std::is_same_v<T, double>) {
+          *value += 0.125;
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          ASSERT_NE(key.choices, nullptr) << key.path << ": a string key without choices needs a value here";
+          const std::vector<std::string> choices = key.choices();
+          const auto other = std::find_if(choices.begin(), choices.end(), [&](const std::string& name) { return name != *value; });
+          ASSERT_NE(other, choices.end()) << key.path;
+          *value = *other;
+        } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+          *value = {0.15, 0.35, 1.5};
+        } else {
+          *value = Eigen::Vector3d(0.1, -0.2, 0.97).normalized();
+        }
+      },
+      key.member(options, side));
+}
+
+// Whether two members of the same key hold equal values.
+bool same_value(const RegistrationConfigMember& a, const RegistrationConfigMember& b) {
+  return std::visit([&b](auto* value) { return *value == *std::get<decltype(value)>(b); }, a);
+}
+
+// The dotted paths of the leaf keys of block YAML as registration_config_yaml writes it (nested
+// mappings indented by 2 spaces, one key per line).
+std::vector<std::string> written_key_paths(const std::string& yaml) {
+  std::vector<std::string> sections, paths;
+  std::istringstream lines(yaml);
+  for (std::string line; std::getline(lines, line);) {
+    const std::size_t indent = line.find_first_not_of(' ');
+    const std::size_t colon = line.find(':');
+    if (indent == std::string::npos || line[indent] == '#' || colon == std::string::npos) continue;
+    sections.resize(indent / 2);
+    const std::string name = line.substr(indent, colon - indent);
+    std::string path;
+    for (const std::string& section : sections) path += section + ".";
+    if (colon + 1 == line.size())
+      sections.push_back(name);  // a section: its keys follow, indented
+    else
+      paths.push_back(path + name);
+  }
+  return paths;
+}
+
+TEST(RegistrationConfig, EveryKeyRoundTripsThroughTheWrittenYaml) {
+  const std::filesystem::path folder = temporary_folder("every_key");
+  const RegistrationOptions defaults;
+  for (const ConfigSide side : {ConfigSide::Source, ConfigSide::Target}) {
+    const std::string side_name = side == ConfigSide::Source ? "source" : "target";
+    const ConfigSide other_side = side == ConfigSide::Source ? ConfigSide::Target : ConfigSide::Source;
+    RegistrationOptions changed;
+    for (const RegistrationConfigKey& key : registration_config_keys()) {
+      change_member(key, changed, side);
+      RegistrationOptions unchanged;
+      ASSERT_FALSE(same_value(key.member(changed, side), key.member(unchanged, side))) << key.path;
     }
-    EXPECT_EQ(yaml.modelling.fitter, cxx.modelling.fitter);
-    EXPECT_EQ(yaml.modelling.quadrics_per_class, cxx.modelling.quadrics_per_class);
-    EXPECT_EQ(yaml.modelling.augmentation_threshold, cxx.modelling.augmentation_threshold);
-    EXPECT_EQ(yaml.correspondences.top_k_similar, cxx.correspondences.top_k_similar);
-    EXPECT_EQ(yaml.graphs.thresholds, cxx.graphs.thresholds);
-    EXPECT_EQ(yaml.estimation.refiner, cxx.estimation.refiner);
-    EXPECT_EQ(yaml.estimation.refinement.max_iterations, cxx.estimation.refinement.max_iterations);
-    EXPECT_DOUBLE_EQ(yaml.estimation.refinement.function_tolerance, cxx.estimation.refinement.function_tolerance);
-    EXPECT_DOUBLE_EQ(yaml.estimation.manhattan_tolerance_degrees, cxx.estimation.manhattan_tolerance_degrees);
-    EXPECT_DOUBLE_EQ(yaml.selection.dcs_phi, cxx.selection.dcs_phi);
-    EXPECT_DOUBLE_EQ(yaml.selection.manhattan_tolerance_degrees, cxx.selection.manhattan_tolerance_degrees);
-    EXPECT_EQ(yaml.ambiguity.minimum_clique_for_ok, cxx.ambiguity.minimum_clique_for_ok);
+    const std::string yaml = registration_config_yaml(changed, side_name);
+    const std::string file = write_text(folder / (side_name + ".yaml"), yaml);
+    RegistrationOptions applied;  // fresh defaults
+    apply_registration_config(file, applied, side_name);
+    RegistrationOptions fresh;
+    for (const RegistrationConfigKey& key : registration_config_keys()) {
+      EXPECT_TRUE(same_value(key.member(applied, side), key.member(changed, side))) << side_name << " " << key.path << "\n" << yaml;
+      if (key.per_side) {  // the other side keeps its defaults
+        EXPECT_TRUE(same_value(key.member(applied, other_side), key.member(fresh, other_side))) << side_name << " " << key.path;
+      }
+    }
+    EXPECT_EQ(registration_config_yaml(applied, side_name), yaml);
+  }
+  EXPECT_THROW(registration_config_yaml(defaults, "both"), Error);
+}
+
+TEST(RegistrationConfig, EveryKeyIsInTheSchemaAndTheWrittenYaml) {
+  const std::string schema = registration_config_schema();
+  const std::string yaml = registration_config_yaml(RegistrationOptions{});
+  std::vector<std::string> table;
+  for (const RegistrationConfigKey& key : registration_config_keys()) {
+    table.push_back(key.path);
+    EXPECT_NE(schema.find("\n" + key.path + " "), std::string::npos) << key.path << "\n" << schema;
+    EXPECT_FALSE(key.description.empty()) << key.path;
+    EXPECT_NE(key.member, nullptr) << key.path;
+  }
+  EXPECT_EQ(written_key_paths(yaml), table) << yaml;  // every key once, in table order
+  std::vector<std::string> unique = table;
+  std::sort(unique.begin(), unique.end());
+  EXPECT_EQ(std::unique(unique.begin(), unique.end()), unique.end()) << "a key is listed twice";
+}
+
+// Characteristic values of every preset, as `quadrix config --preset NAME` prints them, and every
+// preset's printed configuration reading back to that preset.
+TEST(RegistrationConfig, PresetsKeepTheirValues) {
+  const RegistrationOptions vlp64 = registration_preset("vlp64");
+  EXPECT_DOUBLE_EQ(vlp64.source_extraction.planes.voxel_size, 1.0);
+  EXPECT_DOUBLE_EQ(vlp64.target_extraction.planes.eigenvalue_ratio, 30.0);
+  EXPECT_DOUBLE_EQ(vlp64.source_extraction.minimum_range, 2.0);
+  EXPECT_EQ(vlp64.modelling.fitter, "statistical");
+  const RegistrationOptions vlp16 = registration_preset("vlp16");
+  EXPECT_DOUBLE_EQ(vlp16.source_extraction.planes.voxel_size, 1.4);
+  EXPECT_DOUBLE_EQ(vlp16.target_extraction.planes.merge_distance, 0.28);
+  EXPECT_DOUBLE_EQ(vlp16.source_extraction.planes.eigenvalue_ratio, 16.0);
+  const RegistrationOptions mid360 = registration_preset("mid360");
+  EXPECT_DOUBLE_EQ(mid360.source_extraction.planes.voxel_size, 1.2);
+  EXPECT_DOUBLE_EQ(mid360.target_extraction.minimum_range, 0.5);
+  EXPECT_FALSE(mid360.source_extraction.trunks.enabled);
+  EXPECT_DOUBLE_EQ(mid360.source_extraction.planes.cluster_plane_width, 0.5);
+  const RegistrationOptions avia = registration_preset("avia");
+  EXPECT_DOUBLE_EQ(avia.source_extraction.planes.merge_distance, 0.22);
+  EXPECT_DOUBLE_EQ(avia.target_extraction.planes.eigenvalue_ratio, 20.0);
+  EXPECT_DOUBLE_EQ(avia.source_extraction.planes.cluster_plane_area, 2.0);
+  const RegistrationOptions monument = registration_preset("monument");
+  EXPECT_TRUE(monument.source_extraction.static_scan);
+  EXPECT_DOUBLE_EQ(monument.target_extraction.maximum_range, 0.0);
+  EXPECT_EQ(monument.modelling.fitter, "constrained");
+  EXPECT_EQ(monument.source_extraction.shapes.minimum_points, 60);
+  // Every preset's printed configuration, applied over another preset, gives that preset back.
+  const std::filesystem::path folder = temporary_folder("presets");
+  for (const std::string& name : registration_preset_names()) {
+    const std::string yaml = registration_config_yaml(registration_preset(name));
+    const std::string file = write_text(folder / (name + ".yaml"), yaml);
+    RegistrationOptions applied = registration_preset(name == "vlp16" ? "monument" : "vlp16");
+    apply_registration_config(file, applied);
+    EXPECT_EQ(registration_config_yaml(applied, "target"), yaml) << name;
+    EXPECT_EQ(applied.source_extraction.preset, name);
   }
 }
 
@@ -83,6 +184,15 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   EXPECT_DOUBLE_EQ(options.target_extraction.planes.voxel_size, 2.5);
   EXPECT_EQ(options.graphs.thresholds, (std::vector<double>{0.3, 0.9}));
   EXPECT_EQ(options.estimation.refiner, "nlopt");
+  // `sensor` restarts the extraction before the other keys, wherever it stands in the file.
+  const std::string sensor_last = write_text(folder / "sensor_last.yaml", "extraction:\n  planes:\n    voxel_size: 2.5\nsensor: mid360\n");
+  RegistrationOptions restarted = registration_preset("vlp64");
+  apply_registration_config(sensor_last, restarted);
+  for (const ExtractionOptions* side : {&restarted.source_extraction, &restarted.target_extraction}) {
+    EXPECT_EQ(side->preset, "mid360");
+    EXPECT_DOUBLE_EQ(side->planes.voxel_size, 2.5);
+    EXPECT_DOUBLE_EQ(side->planes.merge_distance, 0.25);
+  }
 
   const auto expect_error_naming = [&](const std::string& file_name, const std::string& text, const std::string& needle) {
     const std::string path = write_text(folder / file_name, text);
@@ -103,6 +213,11 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("bad_thresholds.yaml", "matching:\n  thresholds: [0.5, 0.2]\n", "'matching.thresholds'");
   expect_error_naming("bad_refiner.yaml", "estimation:\n  refiner: gauss\n", "'estimation.refiner'");
   expect_error_naming("bad_voxel.yaml", "dense_search:\n  voxel_size: 0\n", "'dense_search.voxel_size'");
+  expect_error_naming("bad_fitter.yaml", "modelling:\n  fitter: magic\n", "'modelling.fitter'");
+  expect_error_naming("zero_up.yaml", "extraction:\n  up: [0, 0, 0]\n", "'extraction.up'");
+  expect_error_naming("short_up.yaml", "extraction:\n  up: [0, 1]\n", "'extraction.up'");
+  expect_error_naming("scalar_section.yaml", "extraction:\n  planes: 3\n", "'extraction.planes'");
+  expect_error_naming("list_for_number.yaml", "selection:\n  dcs_phi: [1, 2]\n", "'selection.dcs_phi'");
   RegistrationOptions ignored;
   EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
   EXPECT_THROW(registration_preset("hdl999"), Error);
@@ -194,37 +309,6 @@ TEST(RegistrationConfig, AutoPresetRegistersATiltedSourceScan) {
   std::printf("tilted source: status %s, RTE %.3f m, RRE %.3f deg\n", registration_status_name(result.status), rte, rre);
   EXPECT_EQ(result.status, RegistrationStatus::Ok) << result.message;
   EXPECT_TRUE(registration_succeeded(result.transform, truth)) << "RTE " << rte << " m, RRE " << rre << " deg";
-}
-
-TEST(RegistrationConfig, PrintedConfigurationRoundTripsThroughApply) {
-  const std::filesystem::path folder = temporary_folder("config_yaml");
-  for (const std::string& name : registration_preset_names()) {
-    RegistrationOptions options = registration_preset(name);
-    options.source_extraction.up = Eigen::Vector3d(0.1, -0.2, 0.97).normalized();  // values no preset has
-    options.source_extraction.minimum_range = 2.25;
-    options.graphs.thresholds = {0.15, 0.35};
-    options.modelling.fitter = "taubin";
-    options.estimation.minimum_inliers = 4;
-    options.ambiguity.score_ratio = 0.8125;
-    options.ambiguity.minimum_clique_for_ok = 7;
-    options.ambiguity.overlap_margin = 0.3125;
-    options.dense_search.enabled = false;
-    options.dense_search.step = 0.75;
-    options.dense_search.source_samples = 2500;
-    options.dense_search.decisive_margin = 0.0625;
-    options.dense_search.across_step = 1.25;
-    options.dense_search.max_refined = 5;
-    options.source_extraction.trunks.enabled = !options.source_extraction.trunks.enabled;
-    options.source_extraction.planes.cluster_plane_area = 0.75;
-    const std::string yaml = registration_config_yaml(options);
-    const std::string file = write_text(folder / (name + ".yaml"), "sensor: " + name + "\n" + yaml);
-    RegistrationOptions applied = registration_preset(name == "vlp16" ? "monument" : "vlp16");  // start elsewhere
-    apply_registration_config(file, applied);
-    EXPECT_EQ(registration_config_yaml(applied), yaml) << name;
-    EXPECT_TRUE(applied.source_extraction.up.isApprox(options.source_extraction.up, 1e-15)) << name;
-    EXPECT_EQ(applied.graphs.thresholds, options.graphs.thresholds) << name;
-  }
-  EXPECT_THROW(registration_config_yaml(RegistrationOptions{}, "both"), Error);
 }
 
 TEST(RegistrationReport, JsonFollowsTheContractAndPicturesAreWritten) {

@@ -1,11 +1,12 @@
-// Issue 8 on the non-KITTI pairs of ../shared/data/pairs.tsv that have ground truth (HDL-32E, 3DTK,
+// Registration acceptance on the non-KITTI pairs of ../shared/data/pairs.tsv that have ground truth (HDL-32E, 3DTK,
 // 3DMatch), each side with `--preset auto`, as `quadrix register` runs them. (The KITTI pairs are in
 // tests/estimation/test_registration.cpp.) Every pair is printed beside the identity's errors, so a
 // "success" that the identity would also achieve is visible; the assertions are the rule "never a
 // confident wrong answer" on every pair, and the pairs measured to succeed.
 #include "estimation/registration.h"
-#include "experiments/bench_pairs.h"
-#include "experiments/registration_config.h"
+#include "experiments/benchmark/bench_pairs.h"
+#include "estimation/registration_config.h"
+#include "geometry/constants.h"
 #include "geometry/io.h"
 #include "test_data.h"
 
@@ -81,7 +82,7 @@ TEST(RegisterRealPairs, DenseSearchNeverSettlesAnAnswerWrongly) {
     const Eigen::Isometry3d& truth = *pair.ground_truth;
     for (const double offset : {5.0, 10.0, 15.0}) {
       SCOPED_TRACE(pair.id + " offset " + std::to_string(offset));
-      const double heading = std::uniform_real_distribution<double>(0.0, 2.0 * 3.14159265358979)(rng);
+      const double heading = std::uniform_real_distribution<double>(0.0, 2.0 * kPi)(rng);
       RegistrationResult result;
       result.status = RegistrationStatus::Ambiguous;
       result.transform = Eigen::Translation3d(offset * std::cos(heading), offset * std::sin(heading), 0.0) * truth;

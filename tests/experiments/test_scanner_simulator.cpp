@@ -2,9 +2,10 @@
 // hierarchy against brute force), points on their primitives, occlusion, noise and dropout
 // statistics, per-primitive counts, thread-count independence, ground-truth relative transforms and
 // the byte-identical output folder.
-#include "experiments/mesh_ray_caster.h"
-#include "experiments/scanner_simulator.h"
-#include "experiments/synthetic_output.h"
+#include "experiments/synthetic/mesh_ray_caster.h"
+#include "experiments/synthetic/scanner_simulator.h"
+#include "experiments/synthetic/synthetic_output.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 
@@ -100,17 +101,17 @@ TEST(Sensors, PresetsMatchTheirDatasheets) {
 TEST(Sensors, LivoxRosetteStaysInItsConeAndDoesNotRepeat) {
   const SensorModel livox = sensor_preset("livox");
   const auto directions = sensor_ray_directions(livox);
-  const double half_angle = 0.5 * livox.rosette_field_of_view_deg * M_PI / 180.0;
+  const double half_angle = 0.5 * livox.rosette_field_of_view_deg * kPi / 180.0;
   std::set<std::pair<int, int>> cells;
   for (const auto& direction : directions) {
     ASSERT_GT(direction.x(), 0.0);
     const double azimuth = std::atan2(direction.y(), direction.x());
     const double elevation = std::asin(direction.z());
     ASSERT_LE(std::hypot(azimuth, elevation), half_angle + 1e-9);
-    cells.insert({static_cast<int>(std::floor(azimuth * 180.0 / M_PI)), static_cast<int>(std::floor(elevation * 180.0 / M_PI))});
+    cells.insert({static_cast<int>(std::floor(azimuth * 180.0 / kPi)), static_cast<int>(std::floor(elevation * 180.0 / kPi))});
   }
   // Non-repetitive coverage: a frame spreads over most 1-degree cells of the 70-degree disc.
-  const double disc_cells = M_PI * 35.2 * 35.2;
+  const double disc_cells = kPi * 35.2 * 35.2;
   EXPECT_GT(cells.size(), 0.6 * disc_cells);
 }
 
@@ -197,7 +198,7 @@ TEST(RayCaster, HierarchyAgreesWithBruteForce) {
   }
 }
 
-// The meshed alternative (CGAL AABB tree, measured in bench_simulator) sees the same surfaces: on
+// The meshed alternative (CGAL AABB tree, measured in microbenchmark_simulator) sees the same surfaces: on
 // random rays from the sensor almost every ray hits the same primitive at the same range, up to the
 // chord error of the mesh; the rest graze primitive edges where a mesh and the exact bounds differ.
 TEST(MeshRayCaster, AgreesWithTheExactCasterUpToTheMeshChordError) {

@@ -1,7 +1,8 @@
 // Synthetic scenes: label table, layouts per seed, the monument's primitive counts, ground truth
 // consistency with the geometry library, pose specifications and the portable random numbers.
-#include "experiments/synthetic_output.h"
-#include "experiments/synthetic_scene.h"
+#include "experiments/synthetic/synthetic_output.h"
+#include "experiments/synthetic/synthetic_scene.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <gtest/gtest.h>
@@ -98,7 +99,7 @@ TEST(Street, EverySeedHasEveryStreetClass) {
     ASSERT_EQ(scene.default_lidar_poses.size(), 2u);
     const Eigen::Isometry3d relative = relative_transform(scene.default_lidar_poses[0], scene.default_lidar_poses[1]);
     const double distance = relative.translation().norm();
-    const double angle = Eigen::AngleAxisd(relative.linear()).angle() * 180.0 / M_PI;
+    const double angle = Eigen::AngleAxisd(relative.linear()).angle() * 180.0 / kPi;
     EXPECT_GE(distance, 3.0);
     EXPECT_LE(distance, 9.0);
     EXPECT_GE(angle, 15.0);
@@ -176,7 +177,7 @@ TEST(PoseSpec, InlineEntriesAndFilesParse) {
   ASSERT_EQ(poses.size(), 2u);
   EXPECT_TRUE(poses[0].translation().isApprox(Eigen::Vector3d(1, 2, 3)));
   EXPECT_TRUE((poses[0].linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-12));
-  EXPECT_NEAR(Eigen::AngleAxisd(poses[1].linear()).angle(), 10.0 * M_PI / 180.0, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(poses[1].linear()).angle(), 10.0 * kPi / 180.0, 1e-12);
 
   const std::filesystem::path file = std::filesystem::temp_directory_path() / "quadrix_test_pose_spec.txt";
   {

@@ -2,7 +2,9 @@
 // frame (independent of geometry/mesh.cpp), under random poses, with fixed seeds.
 #pragma once
 
+#include "geometry/constants.h"
 #include "geometry/quadric.h"
+#include "test_geometry.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -12,18 +14,6 @@
 #include <random>
 
 namespace quadrix::testing {
-
-inline constexpr double kPi = 3.14159265358979323846;
-
-inline Eigen::Isometry3d random_pose(std::mt19937_64& random) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::Quaterniond rotation(normal(random), normal(random), normal(random), normal(random));
-  rotation.normalize();
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = rotation.toRotationMatrix();
-  pose.translation() = Eigen::Vector3d(normal(random), normal(random), normal(random)) * 20.0;
-  return pose;
-}
 
 /// Points on a canonical surface; `visible_angle` limits the angular sector (cylinders, cones) or the
 /// polar cap (ellipsoids) that is sampled.

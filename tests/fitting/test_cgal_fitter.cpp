@@ -3,7 +3,9 @@
 // normals, reproducibility, and honest statuses for what CGAL cannot detect.
 #include "fitting/cgal_fitter.h"
 #include "fitting/quadric_fitter.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
+#include "test_geometry.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -15,17 +17,8 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-Eigen::Isometry3d random_pose(std::mt19937_64& random) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::Quaterniond rotation(normal(random), normal(random), normal(random), normal(random));
-  rotation.normalize();
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = rotation.toRotationMatrix();
-  pose.translation() = Eigen::Vector3d(normal(random), normal(random), normal(random)) * 10.0;
-  return pose;
-}
+using testing::random_pose;
+using testing::TranslationDraw;
 
 /// Points (and exact normals) on a canonical surface under `pose`.
 std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> sample(QuadricType type, const Eigen::Vector3d& scale,
@@ -88,7 +81,7 @@ TEST_P(CgalDetectsPrimitive, TypeAndScaleFromEstimatedNormals) {
     if (type == QuadricType::Sphere) scale.setConstant(size(random));
     if (type == QuadricType::CircularCylinder) { const double r = size(random); scale << r, r, 1.0; }
     if (type == QuadricType::CircularCone) { const double t = tangent(random); scale << t, t, 1.0; }
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 10.0, TranslationDraw::Gaussian);
     const auto [points, normals] = sample(type, scale, pose, 1500, random);
     const QuadricFit fit = fitter->fit(points, Eigen::Matrix3Xd(), type);
     bool ok = fit.status == FitStatus::Ok && fit.type == type;
@@ -119,7 +112,7 @@ TEST(CgalFitter, AutomaticChoiceKeepsTheShapeCoveringMostPoints) {
   for (const QuadricType type : {QuadricType::Plane, QuadricType::Sphere, QuadricType::CircularCylinder}) {
     for (int round = 0; round < 6; ++round) {
       const Eigen::Vector3d scale = type == QuadricType::Plane ? Eigen::Vector3d::Ones() : Eigen::Vector3d(1.0, 1.0, 1.0);
-      const auto [points, normals] = sample(type, scale, random_pose(random), 1200, random);
+      const auto [points, normals] = sample(type, scale, random_pose(random, 10.0, TranslationDraw::Gaussian), 1200, random);
       const QuadricFit fit = fitter->fit(points, normals, std::nullopt);
       correct += (fit.status == FitStatus::Ok && fit.type == type) ? 1 : 0;
       ++total;
@@ -131,7 +124,7 @@ TEST(CgalFitter, AutomaticChoiceKeepsTheShapeCoveringMostPoints) {
 TEST(CgalFitter, CallerNormalsAreUsedAndFitsAreReproducible) {
   std::mt19937_64 random(62);
   const auto fitter = make_quadric_fitter("cgal");
-  const auto [points, normals] = sample(QuadricType::CircularCylinder, {0.5, 0.5, 1.0}, random_pose(random), 1500, random);
+  const auto [points, normals] = sample(QuadricType::CircularCylinder, {0.5, 0.5, 1.0}, random_pose(random, 10.0, TranslationDraw::Gaussian), 1500, random);
   const QuadricFit with_normals = fitter->fit(points, normals, QuadricType::CircularCylinder);
   ASSERT_EQ(with_normals.status, FitStatus::Ok) << with_normals.message;
   // Exact normals: the radius from RANSAC's minimal sample is exact up to rounding.
@@ -144,7 +137,7 @@ TEST(CgalFitter, CallerNormalsAreUsedAndFitsAreReproducible) {
 TEST(CgalFitter, LineAndPointUseLeastSquares) {
   std::mt19937_64 random(63);
   const auto fitter = make_quadric_fitter("cgal");
-  const Eigen::Isometry3d pose = random_pose(random);
+  const Eigen::Isometry3d pose = random_pose(random, 10.0, TranslationDraw::Gaussian);
   const auto [points, normals] = sample(QuadricType::Line, Eigen::Vector3d::Ones(), pose, 100, random);
   const QuadricFit line = fitter->fit(points, Eigen::Matrix3Xd(), QuadricType::Line);
   ASSERT_EQ(line.status, FitStatus::Ok);
@@ -160,7 +153,7 @@ TEST(CgalFitter, ReportsWhatCgalCannotDetect) {
   std::mt19937_64 random(64);
   const auto fitter = make_quadric_fitter("cgal");
   EXPECT_EQ(fitter->name(), "cgal");
-  const auto [points, normals] = sample(QuadricType::Sphere, Eigen::Vector3d::Constant(1.0), random_pose(random), 500, random);
+  const auto [points, normals] = sample(QuadricType::Sphere, Eigen::Vector3d::Constant(1.0), random_pose(random, 10.0, TranslationDraw::Gaussian), 500, random);
   const QuadricFit ellipsoid = fitter->fit(points, Eigen::Matrix3Xd(), QuadricType::Ellipsoid);
   EXPECT_EQ(ellipsoid.status, FitStatus::Failed);
   EXPECT_THAT(ellipsoid.message, ::testing::HasSubstr("ellipsoid"));

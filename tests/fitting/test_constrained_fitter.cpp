@@ -1,5 +1,5 @@
-// The constrained fitter against synthetic ground truth: exact full surfaces (1e-6 relative, issue 5
-// figure), half-visible noisy cylinders (radius error <= 5%, statistical acceptance), the automatic
+// The constrained fitter against synthetic ground truth: exact full surfaces (1e-6 relative
+// target), half-visible noisy cylinders (radius error <= 5%, statistical acceptance), the automatic
 // type choice, and honest statuses. Surfaces are sampled here in their canonical frame (independent
 // of geometry/mesh.cpp) under random poses with fixed seeds.
 #include "fitting/constrained_fitter.h"
@@ -59,7 +59,7 @@ ShapeErrors shape_errors(QuadricType type, const Eigen::Vector3d& scale, const E
   return errors;
 }
 
-/// Issue 5 figure: on noise-free full surfaces the constrained fitter recovers type and parameters
+/// Target: on noise-free full surfaces the constrained fitter recovers type and parameters
 /// to 1e-6 relative.
 class ConstrainedExactSurfaces : public ::testing::TestWithParam<QuadricType> {};
 
@@ -69,7 +69,7 @@ int exact_recoveries(const QuadricFitter& fitter, QuadricType type, int count, i
   int passed = 0;
   for (int round = 0; round < rounds; ++round) {
     const Eigen::Vector3d scale = random_scale(type, random);
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0, TranslationDraw::Gaussian);
     const Eigen::Matrix3Xd points = sample_surface_points(type, scale, pose, count, random);
     const QuadricFit fit = fitter.fit(points, Eigen::Matrix3Xd(), type);
     const QuadricDecomposition shape = fit.quadric.decompose();
@@ -92,7 +92,7 @@ TEST_P(ConstrainedExactSurfaces, RecoversTypeScaleAxisAndCentre) {
   EXPECT_EQ(exact_recoveries(*make_quadric_fitter("constrained"), GetParam(), 500, 20, random), 20);
 }
 
-/// The same figure at 10k points: the initial values are screened on a 1,500-point subsample and the
+/// The same target at 10k points: the initial values are screened on a 1,500-point subsample and the
 /// best is polished on every point (residuals read on 2,000 of them).
 TEST_P(ConstrainedExactSurfaces, RecoversTypeScaleAxisAndCentreAtTenThousandPoints) {
   std::mt19937_64 random(2500 + static_cast<int>(GetParam()));
@@ -107,7 +107,7 @@ INSTANTIATE_TEST_SUITE_P(EverySupportedSurface, ConstrainedExactSurfaces,
                                            QuadricType::EllipticCone),
                          [](const auto& info) { return quadric_type_name(info.param); });
 
-/// Issue 5 figure: half-visible cylinders with 2 cm Gaussian noise. Every registered fitter's radius
+/// Target: half-visible cylinders with 2 cm Gaussian noise. Every registered fitter's radius
 /// error is reported; the constrained fitter must stay within 5% in at least 45 of 50 trials.
 TEST(ConstrainedFitter, HalfVisibleNoisyCylinderRadiusWithinFivePercent) {
   std::mt19937_64 random(31);
@@ -117,7 +117,7 @@ TEST(ConstrainedFitter, HalfVisibleNoisyCylinderRadiusWithinFivePercent) {
   const int trials = 50;
   for (int trial = 0; trial < trials; ++trial) {
     const double radius = radius_distribution(random);
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0, TranslationDraw::Gaussian);
     Eigen::Matrix3Xd points =
         sample_surface_points(QuadricType::CircularCylinder, {radius, radius, 1.0}, pose, 500, random, kPi);
     for (Eigen::Index i = 0; i < points.cols(); ++i)
@@ -158,7 +158,7 @@ TEST(ConstrainedFitter, AutomaticTypeChoiceFindsTheGeneratingType) {
     for (int round = 0; round < rounds; ++round) {
       Eigen::Vector3d scale = random_scale(type, random);
       if (type == QuadricType::Plane) scale.setOnes();
-      Eigen::Matrix3Xd points = sample_surface_points(type, scale, random_pose(random), 400, random);
+      Eigen::Matrix3Xd points = sample_surface_points(type, scale, random_pose(random, 20.0, TranslationDraw::Gaussian), 400, random);
       for (Eigen::Index i = 0; i < points.cols(); ++i)
         points.col(i) += Eigen::Vector3d(noise(random), noise(random), noise(random));
       const QuadricFit fit = fitter->fit(points, Eigen::Matrix3Xd(), std::nullopt);
@@ -179,7 +179,7 @@ TEST(ConstrainedFitter, ReportsDegenerateTooFewUnsupportedAndBadInput) {
 
   // A flat patch has no finite best cylinder: the radius diverges and is reported, not returned.
   std::mt19937_64 random(5);
-  const Eigen::Matrix3Xd flat = sample_surface_points(QuadricType::Plane, Eigen::Vector3d::Ones(), random_pose(random), 200, random);
+  const Eigen::Matrix3Xd flat = sample_surface_points(QuadricType::Plane, Eigen::Vector3d::Ones(), random_pose(random, 20.0, TranslationDraw::Gaussian), 200, random);
   const QuadricFit flat_cylinder = fitter->fit(flat, Eigen::Matrix3Xd(), QuadricType::CircularCylinder);
   EXPECT_EQ(flat_cylinder.status, FitStatus::Degenerate) << flat_cylinder.message;
   EXPECT_EQ(fitter->fit(flat, Eigen::Matrix3Xd(), QuadricType::Sphere).status, FitStatus::Degenerate);
@@ -206,7 +206,7 @@ TEST(ConstrainedFitter, RobustLossResistsOutliers) {
   int robust_better = 0;
   const int rounds = 10;
   for (int round = 0; round < rounds; ++round) {
-    Eigen::Isometry3d pose = random_pose(random);
+    Eigen::Isometry3d pose = random_pose(random, 20.0, TranslationDraw::Gaussian);
     Eigen::Matrix3Xd points = sample_surface_points(QuadricType::Sphere, Eigen::Vector3d::Constant(1.5), pose, 400, random);
     for (Eigen::Index i = 0; i < 80; ++i) points.col(i) = pose * Eigen::Vector3d(box(random), box(random), box(random));
     const QuadricFit robust_fit = robust->fit(points, Eigen::Matrix3Xd(), QuadricType::Sphere);

@@ -3,6 +3,7 @@
 // noise; and a monument-like static scan for CGAL Efficient RANSAC.
 #include "fitting/extraction.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <gtest/gtest.h>
@@ -18,7 +19,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Ground of the street scene: z = -1.73 + slope * x (the sensor is 1.73 m above it, KITTI-like).
 constexpr double kSlope = 0.06;  // 3.4 degrees

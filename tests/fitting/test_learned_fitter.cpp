@@ -6,7 +6,9 @@
 #include "fitting/neural_network.h"
 #include "fitting/quadric_fitter.h"
 #include "fitting/statistical_fitter.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
+#include "test_geometry.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -24,20 +26,11 @@
 namespace quadrix {
 namespace {
 
+using testing::random_pose;
+using testing::TranslationDraw;
+
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
-
-constexpr double kPi = 3.14159265358979323846;
-
-Eigen::Isometry3d random_pose(std::mt19937_64& random) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::Quaterniond rotation(normal(random), normal(random), normal(random), normal(random));
-  rotation.normalize();
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = rotation.toRotationMatrix();
-  pose.translation() = Eigen::Vector3d(normal(random), normal(random), normal(random)) * 20.0;
-  return pose;
-}
 
 double log_uniform(std::mt19937_64& random, double low, double high) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -56,7 +49,7 @@ Segment clean_full_segment(QuadricType type, int count, std::mt19937_64& random)
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::normal_distribution<double> normal(0.0, 1.0);
   Segment segment;
-  segment.pose = random_pose(random);
+  segment.pose = random_pose(random, 20.0, TranslationDraw::Gaussian);
   segment.points.resize(3, count);
   double width = 0, height = 0, radius = 0, length = 0, tangent = 0, h0 = 0, h1 = 0;
   switch (type) {

@@ -2,6 +2,7 @@
 // delta_a, finite full attributes, binary/JSON round trips and corrupted files, and a real KITTI frame.
 #include "fitting/scene_modelling.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 #include "test_data.h"
@@ -19,7 +20,6 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Many separated objects (ellipsoid blobs) on a flat ground: more elements than K_e per class.
 PointCloud make_blob_field(int blobs, std::uint64_t seed) {

@@ -1,6 +1,8 @@
 // Surface sampling and meshing inside extents (geometry/mesh.h) for every real type.
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/mesh.h"
+#include "test_geometry.h"
 
 #include <gtest/gtest.h>
 
@@ -11,14 +13,7 @@
 namespace quadrix {
 namespace {
 
-Eigen::Isometry3d random_pose(std::mt19937_64& random) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  std::uniform_real_distribution<double> uniform(-10.0, 10.0);
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = Eigen::Quaterniond(normal(random), normal(random), normal(random), normal(random)).normalized().toRotationMatrix();
-  pose.translation() = Eigen::Vector3d(uniform(random), uniform(random), uniform(random));
-  return pose;
-}
+using testing::random_pose;
 
 Eigen::Vector3d scales_for(QuadricType type, std::mt19937_64& random) {
   std::uniform_real_distribution<double> uniform(0.4, 1.6);
@@ -62,7 +57,7 @@ TEST_P(SurfaceTypeTest, SamplesAndMeshVerticesLieOnTheSurfaceInsideTheExtent) {
   extent.minimum = Eigen::Vector3d(-2.5, -3.0, -2.0);
   extent.maximum = Eigen::Vector3d(3.0, 2.0, 2.5);
   for (int trial = 0; trial < 20; ++trial) {
-    const Quadric quadric = Quadric::from_canonical(type, scales_for(type, random), random_pose(random));
+    const Quadric quadric = Quadric::from_canonical(type, scales_for(type, random), random_pose(random, 10.0));
     const QuadricDecomposition shape = quadric.decompose();
     ASSERT_EQ(shape.type, type);
     const Eigen::Matrix3Xd samples = sample_surface(shape, extent, 0.2);
@@ -105,7 +100,7 @@ TEST(SampleSurfaceTest, SpacingBoundsTheGapsOnSpheresAndCylinders) {
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-3.0, 3.0);
   for (QuadricType type : {QuadricType::Sphere, QuadricType::EllipticCylinder}) {
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 10.0);
     const Eigen::Vector3d scale = type == QuadricType::Sphere ? Eigen::Vector3d::Constant(1.3) : Eigen::Vector3d(0.8, 1.7, 0.0);
     const QuadricDecomposition shape = Quadric::from_canonical(type, scale, pose).decompose();
     const double spacing = 0.1;
@@ -126,7 +121,7 @@ TEST(SampleSurfaceTest, SpacingBoundsTheGapsOnSpheresAndCylinders) {
 
 TEST(SampleSurfaceTest, PointsLinesAndDegenerateInput) {
   std::mt19937_64 random(8);
-  const Eigen::Isometry3d pose = random_pose(random);
+  const Eigen::Isometry3d pose = random_pose(random, 10.0);
   LocalExtent extent;
   const QuadricDecomposition point = Quadric::from_canonical(QuadricType::Point, Eigen::Vector3d::Ones(), pose).decompose();
   const Eigen::Matrix3Xd one = sample_surface(point, extent, 0.1);
@@ -165,7 +160,7 @@ TEST(MeshTest, ClosedEllipsoidIsOrientedOutwards) {
   extent.minimum = Eigen::Vector3d::Constant(-10.0);
   extent.maximum = Eigen::Vector3d::Constant(10.0);
   const Eigen::Vector3d scale(0.5, 1.0, 2.0);
-  const Eigen::Isometry3d pose = random_pose(random);
+  const Eigen::Isometry3d pose = random_pose(random, 10.0);
   const QuadricDecomposition shape = Quadric::from_canonical(QuadricType::Ellipsoid, scale, pose).decompose();
   const TriangleMesh mesh = mesh_surface(shape, extent, 96);
   // Divergence theorem: signed volume of an outward-oriented closed mesh is the enclosed volume.
@@ -176,7 +171,7 @@ TEST(MeshTest, ClosedEllipsoidIsOrientedOutwards) {
     const Eigen::Vector3d p2 = mesh.vertices.col(t[2]) - pose.translation();
     volume += p0.dot(p1.cross(p2)) / 6.0;
   }
-  const double exact = 4.0 / 3.0 * 3.14159265358979323846 * scale.prod();
+  const double exact = 4.0 / 3.0 * kPi * scale.prod();
   EXPECT_GT(volume, 0.98 * exact);
   EXPECT_LT(volume, exact);
 }
@@ -185,9 +180,9 @@ TEST(MeshTest, AppendShiftsIndicesAndColours) {
   std::mt19937_64 random(10);
   LocalExtent extent;
   const QuadricDecomposition sphere =
-      Quadric::from_canonical(QuadricType::Sphere, Eigen::Vector3d::Constant(0.5), random_pose(random)).decompose();
+      Quadric::from_canonical(QuadricType::Sphere, Eigen::Vector3d::Constant(0.5), random_pose(random, 10.0)).decompose();
   const QuadricDecomposition plane =
-      Quadric::from_canonical(QuadricType::Plane, Eigen::Vector3d::Zero(), random_pose(random)).decompose();
+      Quadric::from_canonical(QuadricType::Plane, Eigen::Vector3d::Zero(), random_pose(random, 10.0)).decompose();
   const TriangleMesh a = mesh_surface(sphere, extent, 12);
   const TriangleMesh b = mesh_surface(plane, extent, 12);
   TriangleMesh scene;

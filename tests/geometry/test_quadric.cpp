@@ -1,8 +1,10 @@
 // Quadric algebra and decomposition (paper §"Quadrics"): randomised shapes under random poses,
 // fixed seeds, every table type plus the other real types, distances against brute force.
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/mesh.h"
 #include "geometry/quadric.h"
+#include "test_geometry.h"
 
 #include <gtest/gtest.h>
 
@@ -15,22 +17,7 @@
 namespace quadrix {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-Eigen::Matrix3d random_rotation(std::mt19937_64& random) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::Quaterniond q(normal(random), normal(random), normal(random), normal(random));
-  q.normalize();
-  return q.toRotationMatrix();
-}
-
-Eigen::Isometry3d random_pose(std::mt19937_64& random, double translation_range = 20.0) {
-  std::uniform_real_distribution<double> uniform(-translation_range, translation_range);
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = random_rotation(random);
-  pose.translation() = Eigen::Vector3d(uniform(random), uniform(random), uniform(random));
-  return pose;
-}
+using testing::random_pose;
 
 double log_uniform(std::mt19937_64& random, double low, double high) {
   std::uniform_real_distribution<double> uniform(std::log(low), std::log(high));
@@ -97,7 +84,7 @@ TEST_P(TableTypeTest, DecompositionRecoversTypeScaleAxesAndCentre) {
   std::mt19937_64 random(1000 + int(type));
   for (int trial = 0; trial < 200; ++trial) {
     const Eigen::Vector3d scale = scales_for(type, random);
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0);
     const Quadric quadric(random_multiplier(random) * Quadric::from_canonical(type, scale, pose).matrix());
     const QuadricDecomposition shape = quadric.decompose();
     SCOPED_TRACE("trial " + std::to_string(trial) + " type " + quadric_type_name(type));
@@ -149,7 +136,7 @@ TEST_P(TableTypeTest, NormalisationMakesDecompositionScaleInvariant) {
   const QuadricType type = GetParam();
   std::mt19937_64 random(2000 + int(type));
   for (int trial = 0; trial < 200; ++trial) {
-    const Quadric quadric = Quadric::from_canonical(type, scales_for(type, random), random_pose(random));
+    const Quadric quadric = Quadric::from_canonical(type, scales_for(type, random), random_pose(random, 20.0));
     const Quadric scaled(random_multiplier(random) * quadric.matrix());
     const QuadricDecomposition a = quadric.decompose();
     const QuadricDecomposition b = scaled.decompose();
@@ -176,11 +163,11 @@ TEST_P(TableTypeTest, TransformKeepsSampledPointsOnSurface) {
   extent.minimum = Eigen::Vector3d::Constant(-3.0);
   extent.maximum = Eigen::Vector3d::Constant(3.0);
   for (int trial = 0; trial < 50; ++trial) {
-    const Quadric quadric = Quadric::from_canonical(type, scales_for(type, random), random_pose(random));
+    const Quadric quadric = Quadric::from_canonical(type, scales_for(type, random), random_pose(random, 20.0));
     const QuadricDecomposition shape = quadric.decompose();
     const Eigen::Matrix3Xd points = sample_surface(shape, extent, 0.3);
     ASSERT_GT(points.cols(), 0);
-    const Eigen::Isometry3d motion = random_pose(random);
+    const Eigen::Isometry3d motion = random_pose(random, 20.0);
     const Quadric moved = quadric.transformed(motion);
     const QuadricDecomposition moved_shape = moved.decompose();
     ASSERT_EQ(moved_shape.type, type);
@@ -247,7 +234,7 @@ TEST_P(OtherRealTypeTest, ClassifiedAndRebuiltUnderRandomPoses) {
   extent.maximum = Eigen::Vector3d::Constant(3.0);
   for (int trial = 0; trial < 200; ++trial) {
     const Eigen::Vector3d scale = distinct_ascending_scales(random, 0.3, 3.0);
-    const Quadric quadric(random_multiplier(random) * Quadric::from_canonical(type, scale, random_pose(random)).matrix());
+    const Quadric quadric(random_multiplier(random) * Quadric::from_canonical(type, scale, random_pose(random, 20.0)).matrix());
     const QuadricDecomposition shape = quadric.decompose();
     ASSERT_EQ(shape.type, type) << "trial " << trial;
     EXPECT_NEAR(shape.rotation.determinant(), 1.0, 1e-12);
@@ -276,7 +263,7 @@ TEST(QuadricTest, RebuildingFromDecompositionRoundTripsForTableTypes) {
   std::mt19937_64 random(6000);
   for (QuadricType type : kTableTypes) {
     for (int trial = 0; trial < 50; ++trial) {
-      const Quadric quadric = Quadric::from_canonical(type, scales_for(type, random), random_pose(random));
+      const Quadric quadric = Quadric::from_canonical(type, scales_for(type, random), random_pose(random, 20.0));
       const Quadric rebuilt = quadric_from_decomposition(quadric.decompose());
       // Point, line and plane: the weights of degenerate axes are not part of the surface; compare surfaces.
       if (type == QuadricType::Point || type == QuadricType::Line || type == QuadricType::Plane) {
@@ -323,7 +310,7 @@ TEST(QuadricTest, NormalisationFollowsPaperRuleAndSignConvention) {
   for (int trial = 0; trial < 100; ++trial) {
     const Eigen::Vector3d scale = distinct_ascending_scales(random, 0.2, 5.0);
     const Quadric ellipsoid(random_multiplier(random) *
-                            Quadric::from_canonical(QuadricType::Ellipsoid, scale, random_pose(random)).matrix());
+                            Quadric::from_canonical(QuadricType::Ellipsoid, scale, random_pose(random, 20.0)).matrix());
     const Eigen::Matrix4d n = ellipsoid.normalized().matrix();
     // Paper: Q * |prod l(Q33) / prod l(Q)| when c44 != 0, i.e. |det Q33 / det Q| for rank 3.
     const double paper = std::abs(ellipsoid.matrix().topLeftCorner<3, 3>().determinant() / ellipsoid.matrix().determinant());
@@ -335,7 +322,7 @@ TEST(QuadricTest, NormalisationFollowsPaperRuleAndSignConvention) {
     EXPECT_GE(shape.eigenvalues[1], shape.eigenvalues[2]);
     // c44 = 0: Frobenius normalisation.
     const Quadric cone(random_multiplier(random) *
-                       Quadric::from_canonical(QuadricType::EllipticCone, Eigen::Vector3d(0.5, 1.0, 0.0), random_pose(random)).matrix());
+                       Quadric::from_canonical(QuadricType::EllipticCone, Eigen::Vector3d(0.5, 1.0, 0.0), random_pose(random, 20.0)).matrix());
     EXPECT_NEAR(cone.normalized().matrix().norm(), 1.0, 1e-12);
     EXPECT_EQ((cone.normalized().decompose().eigenvalues.array() > 0).count(), 2);
   }
@@ -344,7 +331,7 @@ TEST(QuadricTest, NormalisationFollowsPaperRuleAndSignConvention) {
 TEST(QuadricTest, SymmetryAwareIndicators) {
   std::mt19937_64 random(9);
   for (int trial = 0; trial < 50; ++trial) {
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0);
     // Oblate spheroid (two small equal lambdas? here two equal large scales): unique axis is c or a.
     const QuadricDecomposition prolate =
         Quadric::from_canonical(QuadricType::Ellipsoid, Eigen::Vector3d(1.0, 1.0, 3.0), pose).decompose();
@@ -374,7 +361,7 @@ TEST(QuadricTest, SymmetryAwareIndicators) {
 TEST(QuadricTest, ImaginaryAndInvalidQuadrics) {
   std::mt19937_64 random(10);
   for (int trial = 0; trial < 20; ++trial) {
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0);
     for (const Eigen::Vector4d& diagonal :
          {Eigen::Vector4d(1, 2, 3, 1), Eigen::Vector4d(1, 2, 0, 1), Eigen::Vector4d(2, 0, 0, 1)}) {
       Eigen::Matrix4d c = diagonal.asDiagonal();

@@ -1,6 +1,7 @@
 // Struct. 1 records, statistical pose and the full-attribute rule (paper §"Quadric Modeling").
 #include "geometry/error.h"
 #include "geometry/quadric_record.h"
+#include "test_geometry.h"
 
 #include <gtest/gtest.h>
 
@@ -12,19 +13,8 @@
 namespace quadrix {
 namespace {
 
-Eigen::Matrix3d random_rotation(std::mt19937_64& random) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::Quaterniond q(normal(random), normal(random), normal(random), normal(random));
-  return q.normalized().toRotationMatrix();
-}
-
-Eigen::Isometry3d random_pose(std::mt19937_64& random) {
-  std::uniform_real_distribution<double> uniform(-20.0, 20.0);
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = random_rotation(random);
-  pose.translation() = Eigen::Vector3d(uniform(random), uniform(random), uniform(random));
-  return pose;
-}
+using testing::random_pose;
+using testing::random_rotation;
 
 // Gaussian points with standard deviations `sigma` along the columns of `pose`.
 Eigen::Matrix3Xd gaussian_points(std::mt19937_64& random, const Eigen::Isometry3d& pose, const Eigen::Vector3d& sigma,
@@ -96,7 +86,7 @@ TEST(StatisticalPoseTest, RecoversMeanPrincipalAxesAndScale) {
   int within = 0;
   const int rounds = 50;
   for (int trial = 0; trial < rounds; ++trial) {
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0);
     const Eigen::Vector3d sigma(3.0, 1.5, 0.4);
     const Eigen::Matrix3Xd points = gaussian_points(random, pose, sigma, 20000);
     const StatisticalPose statistics = statistical_pose(points);
@@ -126,7 +116,7 @@ TEST(StatisticalPoseTest, RecoversMeanPrincipalAxesAndScale) {
 TEST(FullAttributeRuleTest, PlaneKeepsNormalAndCompletesFromStatistics) {
   std::mt19937_64 random(3);
   for (int trial = 0; trial < 200; ++trial) {
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0);
     // Points on a plane patch: spreads 4 and 1.5 along the plane's b and c, thin along the normal a.
     Eigen::Isometry3d points_pose = pose;
     points_pose.linear() = pose.linear() * Eigen::AngleAxisd(0.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
@@ -150,7 +140,7 @@ TEST(FullAttributeRuleTest, PlaneKeepsNormalAndCompletesFromStatistics) {
 TEST(FullAttributeRuleTest, LineKeepsDirectionWhateverTheOrderOfStatisticalAxes) {
   std::mt19937_64 random(4);
   for (int trial = 0; trial < 200; ++trial) {
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0);
     const Eigen::Matrix3Xd points = gaussian_points(random, pose, Eigen::Vector3d(0.05, 0.02, 5.0), 1000);
     StatisticalPose statistics = statistical_pose(points);
     // Shuffle and flip R_s's columns: the rule must not depend on their order or signs.
@@ -175,8 +165,8 @@ TEST(FullAttributeRuleTest, LineKeepsDirectionWhateverTheOrderOfStatisticalAxes)
 TEST(FullAttributeRuleTest, DefinedAttributesComeFromTheQuadric) {
   std::mt19937_64 random(5);
   for (int trial = 0; trial < 100; ++trial) {
-    const Eigen::Isometry3d pose = random_pose(random);
-    const Eigen::Matrix3Xd points = gaussian_points(random, random_pose(random), Eigen::Vector3d(2.0, 1.0, 0.5), 500);
+    const Eigen::Isometry3d pose = random_pose(random, 20.0);
+    const Eigen::Matrix3Xd points = gaussian_points(random, random_pose(random, 20.0), Eigen::Vector3d(2.0, 1.0, 0.5), 500);
     const StatisticalPose statistics = statistical_pose(points);
     // Ellipsoid: everything defined.
     const Quadric ellipsoid = Quadric::from_canonical(QuadricType::Ellipsoid, Eigen::Vector3d(0.5, 1.0, 2.0), pose);
@@ -206,7 +196,7 @@ TEST(FullAttributeRuleTest, DefinedAttributesComeFromTheQuadric) {
 TEST(FullAttributeRuleTest, InvalidQuadricFallsBackToStatistics) {
   std::mt19937_64 random(6);
   const StatisticalPose statistics =
-      statistical_pose(gaussian_points(random, random_pose(random), Eigen::Vector3d(1.0, 0.5, 0.2), 300));
+      statistical_pose(gaussian_points(random, random_pose(random, 20.0), Eigen::Vector3d(1.0, 0.5, 0.2), 300));
   Vector10d parameters = Vector10d::Zero();
   parameters[0] = std::numeric_limits<double>::quiet_NaN();
   const QuadricRecord record = make_quadric_record(9, Quadric::from_parameters(parameters), statistics);

@@ -3,6 +3,7 @@
 #include "matching/compatibility_graph.h"
 
 #include "geometry/error.h"
+#include "test_geometry.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -24,23 +25,13 @@ Eigen::Matrix3Xd random_points(Eigen::Index count, double box, std::mt19937& ran
   return points;
 }
 
-Eigen::Isometry3d random_pose(std::mt19937& random) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::Quaterniond rotation(normal(random), normal(random), normal(random), normal(random));
-  rotation.normalize();
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = rotation.toRotationMatrix();
-  pose.translation() = Eigen::Vector3d(normal(random), normal(random), normal(random)) * 20.0;
-  return pose;
-}
-
 TEST(CompatibilityGraph, EdgesMatchBruteForceDistanceCheck) {
   std::mt19937 random(11);
   for (int round = 0; round < 20; ++round) {
     const Eigen::Index n = 1 + round * 13;  // crosses word boundaries (64, 128, 192)
     // A small box makes the distance differences straddle the thresholds.
     const Eigen::Matrix3Xd source = random_points(n, 1.0, random);
-    Eigen::Matrix3Xd target = random_pose(random) * source;
+    Eigen::Matrix3Xd target = testing::random_pose(random, 20.0, testing::TranslationDraw::Gaussian) * source;
     target += random_points(n, 0.3, random);
     const CompatibilityGraphOptions options;
     const CompatibilityGraphs graphs = build_compatibility_graphs(source, target, options);
@@ -114,7 +105,7 @@ TEST(CompatibilityGraph, GraduatedCliquesRecoverPlantedInliers) {
   const Eigen::Index correspondence_count = 400;
   const Eigen::Index inlier_count = 60;
   for (int round = 0; round < 10; ++round) {
-    const Eigen::Isometry3d pose = random_pose(random);
+    const Eigen::Isometry3d pose = testing::random_pose(random, 20.0, testing::TranslationDraw::Gaussian);
     const Eigen::Matrix3Xd source = random_points(correspondence_count, 50.0, random);
     Eigen::Matrix3Xd target = pose * source;
     // Inliers: noise of at most 0.05 m per axis (|noise| <= 0.087 m, so d_ij <= 0.174 m < δ_1 = 0.2 m).
