@@ -204,12 +204,13 @@ std::vector<RegistrationCandidate> estimate_candidates(const SceneModel& source,
     candidate.threshold = graphs.thresholds[level];
     candidate.clique_size = clique.size();
     if (!reused) {
+      candidate.clique = clique_pairs(correspondence_set, clique);
       if (clique.size() < options.minimum_inliers) {
         candidate.refinement_status = "skipped";
         candidate.note = "clique of " + std::to_string(clique.size()) + " correspondences (< " +
                          std::to_string(options.minimum_inliers) + ")";
       } else {
-        estimate_candidate(context, clique_pairs(correspondence_set, clique), candidate);
+        estimate_candidate(context, candidate.clique, candidate);
       }
     }
     candidates.push_back(candidate);

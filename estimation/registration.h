@@ -89,6 +89,7 @@ struct RegistrationCandidate {
   std::size_t level = 0;                      ///< index k of the compatibility graph level
   double threshold = 0.0;                     ///< δ_m^k of that level, m
   std::size_t clique_size = 0;                ///< |I*_k|
+  std::vector<RecordCorrespondence> clique;   ///< I*_k: (source record, target record) indices of the clique's correspondences
   Eigen::Isometry3d initial = Eigen::Isometry3d::Identity();    ///< T^0_k = SVD(R_x, R_y, I*_k)
   Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< T_k after refinement
   std::string refinement_status;              ///< refinement_status_name, or "skipped" (too few inliers / SVD degenerate)
