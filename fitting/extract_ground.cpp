@@ -28,6 +28,132 @@ double plane_height(const Patch& patch, double x, double y) {
   return patch.centroid.z() - (n.x() * (x - patch.centroid.x()) + n.y() * (y - patch.centroid.y())) / n.z();
 }
 
+// Rotation into the local frame: rows e1, e2 horizontal, e3 = up.
+Eigen::Matrix3d local_frame(const Eigen::Vector3d& up) {
+  const Eigen::Vector3d helper = std::abs(up.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d e1 = (helper - helper.dot(up) * up).normalized();
+  const Eigen::Vector3d e2 = up.cross(e1);
+  Eigen::Matrix3d to_local;
+  to_local.row(0) = e1.transpose();
+  to_local.row(1) = e2.transpose();
+  to_local.row(2) = up.transpose();
+  return to_local;
+}
+
+// The concentric-zone patches (rings by GroundOptions::ring_edges, sectors per ring growing outwards)
+// with their candidate points, each candidate's patch (-1 outside the rings) and local coordinates.
+struct PatchGrid {
+  std::vector<Patch> patches;
+  std::vector<int> point_patch;  // per candidate
+  Eigen::Matrix3Xd local;        // per cloud point (filled for candidates only)
+};
+
+PatchGrid assign_patches(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
+                         const GroundOptions& options, const Eigen::Vector3d& sensor_origin, const Eigen::Matrix3d& to_local) {
+  const int ring_count = static_cast<int>(options.ring_edges.size()) - 1;
+  std::vector<int> sectors(ring_count), ring_offset(ring_count + 1, 0);
+  for (int ring = 0; ring < ring_count; ++ring) {
+    sectors[ring] = std::min(options.sectors_max, options.sectors_near * (ring + 1));
+    ring_offset[ring + 1] = ring_offset[ring] + sectors[ring];
+  }
+  PatchGrid grid;
+  grid.patches.resize(ring_offset[ring_count]);
+  grid.local.resize(3, points.cols());
+  grid.point_patch.assign(candidates.size(), -1);
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const Eigen::Vector3d p = to_local * (points.col(candidates[i]) - sensor_origin);
+    grid.local.col(candidates[i]) = p;
+    const double radius = std::hypot(p.x(), p.y());
+    const auto edge = std::upper_bound(options.ring_edges.begin(), options.ring_edges.end(), radius);
+    const int ring = static_cast<int>(edge - options.ring_edges.begin()) - 1;
+    if (ring < 0 || ring >= ring_count) continue;
+    const double angle = std::atan2(p.y(), p.x()) + kPi;
+    const int sector = std::min(sectors[ring] - 1, static_cast<int>(angle / (2.0 * kPi) * sectors[ring]));
+    grid.point_patch[i] = ring_offset[ring] + sector;
+    grid.patches[grid.point_patch[i]].members.push_back(candidates[i]);
+  }
+  return grid;
+}
+
+// Per-patch plane: PCA of the points near the lowest band, refined on inliers; an upright, flat,
+// two-dimensional patch with enough inliers becomes a candidate. Returns whether a plane was fitted.
+bool fit_patch_plane(Patch& patch, const Eigen::Matrix3Xd& local, const GroundOptions& options, double cos_slope) {
+  if (static_cast<int>(patch.members.size()) < options.minimum_patch_points) return false;
+  std::vector<double> heights;
+  heights.reserve(patch.members.size());
+  for (const std::uint32_t index : patch.members) heights.push_back(local(2, index));
+  const std::size_t lowest = std::min<std::size_t>(std::max(1, options.lowest_points), heights.size());
+  std::nth_element(heights.begin(), heights.begin() + static_cast<std::ptrdiff_t>(lowest - 1), heights.end());
+  std::sort(heights.begin(), heights.begin() + static_cast<std::ptrdiff_t>(lowest));
+  // Skip the very lowest few (below-ground reflections) as Patchwork does: mean of the lowest band.
+  double floor_height = 0.0;
+  for (std::size_t k = 0; k < lowest; ++k) floor_height += heights[k];
+  floor_height /= static_cast<double>(lowest);
+  detail::Moments moments;
+  for (const std::uint32_t index : patch.members)
+    if (local(2, index) < floor_height + options.seed_height) moments.add(local.col(index));
+  if (moments.count < 3) return true;
+  detail::Principal axes;
+  for (int iteration = 0; iteration <= options.refinement_iterations; ++iteration) {
+    axes = detail::principal_axes(moments.covariance());
+    Eigen::Vector3d normal = axes.vectors.col(0);
+    if (normal.z() < 0) normal = -normal;
+    patch.normal = normal;
+    patch.centroid = moments.mean();
+    if (iteration == options.refinement_iterations) break;
+    detail::Moments refined;
+    for (const std::uint32_t index : patch.members)
+      if (std::abs(normal.dot(local.col(index) - patch.centroid)) <= options.inlier_distance) refined.add(local.col(index));
+    if (refined.count < 3) break;
+    moments = refined;
+  }
+  const double total = axes.values.sum();
+  const bool upright = patch.normal.z() >= cos_slope;
+  const bool flat = total > 0.0 && axes.values(0) <= options.max_flatness * total;
+  const bool two_dimensional = axes.values(2) > 0.0 && axes.values(1) >= 1e-3 * axes.values(2);
+  if (!(upright && flat && two_dimensional)) return true;
+  for (const std::uint32_t index : patch.members)
+    if (std::abs(patch.normal.dot(local.col(index) - patch.centroid)) <= options.inlier_distance)
+      patch.inliers.push_back(index);
+  patch.candidate = static_cast<int>(patch.inliers.size()) >= options.minimum_patch_points;
+  return true;
+}
+
+// Region growing over candidate patches from the best-supported one (TRAVEL's traversable graph):
+// neighbours are patches whose centroids are close horizontally, and both planes must agree in
+// height at their midpoint and in slope. Marks the reached patches accepted.
+void grow_ground_region(std::vector<Patch>& patches, const GroundOptions& options) {
+  std::vector<int> candidate_patches;
+  for (int index = 0; index < static_cast<int>(patches.size()); ++index)
+    if (patches[index].candidate) candidate_patches.push_back(index);
+  if (candidate_patches.empty()) return;
+  const double cos_neighbour = std::cos(options.max_neighbour_angle_deg * kPi / 180.0);
+  const auto is_neighbour = [&](const Patch& a, const Patch& b) {
+    const Eigen::Vector2d delta = (a.centroid - b.centroid).head<2>();
+    const double radius = std::max(a.centroid.head<2>().norm(), b.centroid.head<2>().norm());
+    const double reach = std::max(8.0, 0.35 * radius);
+    if (delta.norm() > reach) return false;
+    const Eigen::Vector2d middle = 0.5 * (a.centroid + b.centroid).head<2>();
+    const double step = std::abs(plane_height(a, middle.x(), middle.y()) - plane_height(b, middle.x(), middle.y()));
+    return step <= options.max_step_height && a.normal.dot(b.normal) >= cos_neighbour;
+  };
+  const int seed = *std::max_element(candidate_patches.begin(), candidate_patches.end(), [&](int a, int b) {
+    return patches[a].inliers.size() < patches[b].inliers.size();
+  });
+  std::queue<int> queue;
+  patches[seed].accepted = true;
+  queue.push(seed);
+  while (!queue.empty()) {
+    const int current = queue.front();
+    queue.pop();
+    for (const int other : candidate_patches) {
+      if (patches[other].accepted || !is_neighbour(patches[current], patches[other])) continue;
+      patches[other].accepted = true;
+      queue.push(other);
+    }
+  }
+}
+
 }  // namespace
 
 GroundSegmentation segment_ground(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
@@ -39,114 +165,14 @@ GroundSegmentation segment_ground(const Eigen::Matrix3Xd& points, const std::vec
     result.other_heights.assign(candidates.size(), 0.0f);
     return result;
   }
-  // Local frame: e3 = up, e1/e2 horizontal.
   const Eigen::Vector3d up = up_axis.normalized();
-  const Eigen::Vector3d helper = std::abs(up.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d e1 = (helper - helper.dot(up) * up).normalized();
-  const Eigen::Vector3d e2 = up.cross(e1);
-  Eigen::Matrix3d to_local;
-  to_local.row(0) = e1.transpose();
-  to_local.row(1) = e2.transpose();
-  to_local.row(2) = up.transpose();
-
-  const int ring_count = static_cast<int>(options.ring_edges.size()) - 1;
-  std::vector<int> sectors(ring_count), ring_offset(ring_count + 1, 0);
-  for (int ring = 0; ring < ring_count; ++ring) {
-    sectors[ring] = std::min(options.sectors_max, options.sectors_near * (ring + 1));
-    ring_offset[ring + 1] = ring_offset[ring] + sectors[ring];
-  }
-  std::vector<Patch> patches(ring_offset[ring_count]);
-  Eigen::Matrix3Xd local(3, points.cols());
-  std::vector<int> point_patch(candidates.size(), -1);
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const Eigen::Vector3d p = to_local * (points.col(candidates[i]) - sensor_origin);
-    local.col(candidates[i]) = p;
-    const double radius = std::hypot(p.x(), p.y());
-    const auto edge = std::upper_bound(options.ring_edges.begin(), options.ring_edges.end(), radius);
-    const int ring = static_cast<int>(edge - options.ring_edges.begin()) - 1;
-    if (ring < 0 || ring >= ring_count) continue;
-    const double angle = std::atan2(p.y(), p.x()) + kPi;
-    const int sector = std::min(sectors[ring] - 1, static_cast<int>(angle / (2.0 * kPi) * sectors[ring]));
-    point_patch[i] = ring_offset[ring] + sector;
-    patches[point_patch[i]].members.push_back(candidates[i]);
-  }
-
-  // Per-patch plane: PCA of the lowest points, refined on inliers; upright and flat patches are candidates.
+  const Eigen::Matrix3d to_local = local_frame(up);
+  PatchGrid grid = assign_patches(points, candidates, options, sensor_origin, to_local);
+  std::vector<Patch>& patches = grid.patches;
   const double cos_slope = std::cos(options.max_slope_deg * kPi / 180.0);
-  for (Patch& patch : patches) {
-    if (static_cast<int>(patch.members.size()) < options.minimum_patch_points) continue;
-    ++result.patches_fitted;
-    std::vector<double> heights;
-    heights.reserve(patch.members.size());
-    for (const std::uint32_t index : patch.members) heights.push_back(local(2, index));
-    const std::size_t lowest = std::min<std::size_t>(std::max(1, options.lowest_points), heights.size());
-    std::nth_element(heights.begin(), heights.begin() + static_cast<std::ptrdiff_t>(lowest - 1), heights.end());
-    std::sort(heights.begin(), heights.begin() + static_cast<std::ptrdiff_t>(lowest));
-    // Skip the very lowest few (below-ground reflections) as Patchwork does: mean of the lowest band.
-    double floor_height = 0.0;
-    for (std::size_t k = 0; k < lowest; ++k) floor_height += heights[k];
-    floor_height /= static_cast<double>(lowest);
-    detail::Moments moments;
-    for (const std::uint32_t index : patch.members)
-      if (local(2, index) < floor_height + options.seed_height) moments.add(local.col(index));
-    if (moments.count < 3) continue;
-    detail::Principal axes;
-    for (int iteration = 0; iteration <= options.refinement_iterations; ++iteration) {
-      axes = detail::principal_axes(moments.covariance());
-      Eigen::Vector3d normal = axes.vectors.col(0);
-      if (normal.z() < 0) normal = -normal;
-      patch.normal = normal;
-      patch.centroid = moments.mean();
-      if (iteration == options.refinement_iterations) break;
-      detail::Moments refined;
-      for (const std::uint32_t index : patch.members)
-        if (std::abs(normal.dot(local.col(index) - patch.centroid)) <= options.inlier_distance) refined.add(local.col(index));
-      if (refined.count < 3) break;
-      moments = refined;
-    }
-    const double total = axes.values.sum();
-    const bool upright = patch.normal.z() >= cos_slope;
-    const bool flat = total > 0.0 && axes.values(0) <= options.max_flatness * total;
-    const bool two_dimensional = axes.values(2) > 0.0 && axes.values(1) >= 1e-3 * axes.values(2);
-    if (!(upright && flat && two_dimensional)) continue;
-    for (const std::uint32_t index : patch.members)
-      if (std::abs(patch.normal.dot(local.col(index) - patch.centroid)) <= options.inlier_distance)
-        patch.inliers.push_back(index);
-    patch.candidate = static_cast<int>(patch.inliers.size()) >= options.minimum_patch_points;
-  }
-
-  // Region growing over candidate patches from the best-supported one; neighbours are patches whose
-  // centroids are close horizontally; both planes must agree in height at the midpoint and in slope.
-  std::vector<int> candidate_patches;
-  for (int index = 0; index < static_cast<int>(patches.size()); ++index)
-    if (patches[index].candidate) candidate_patches.push_back(index);
-  if (!candidate_patches.empty()) {
-    const double cos_neighbour = std::cos(options.max_neighbour_angle_deg * kPi / 180.0);
-    const auto is_neighbour = [&](const Patch& a, const Patch& b) {
-      const Eigen::Vector2d delta = (a.centroid - b.centroid).head<2>();
-      const double radius = std::max(a.centroid.head<2>().norm(), b.centroid.head<2>().norm());
-      const double reach = std::max(8.0, 0.35 * radius);
-      if (delta.norm() > reach) return false;
-      const Eigen::Vector2d middle = 0.5 * (a.centroid + b.centroid).head<2>();
-      const double step = std::abs(plane_height(a, middle.x(), middle.y()) - plane_height(b, middle.x(), middle.y()));
-      return step <= options.max_step_height && a.normal.dot(b.normal) >= cos_neighbour;
-    };
-    const int seed = *std::max_element(candidate_patches.begin(), candidate_patches.end(), [&](int a, int b) {
-      return patches[a].inliers.size() < patches[b].inliers.size();
-    });
-    std::queue<int> queue;
-    patches[seed].accepted = true;
-    queue.push(seed);
-    while (!queue.empty()) {
-      const int current = queue.front();
-      queue.pop();
-      for (const int other : candidate_patches) {
-        if (patches[other].accepted || !is_neighbour(patches[current], patches[other])) continue;
-        patches[other].accepted = true;
-        queue.push(other);
-      }
-    }
-  }
+  for (Patch& patch : patches)
+    if (fit_patch_plane(patch, grid.local, options, cos_slope)) ++result.patches_fitted;
+  grow_ground_region(patches, options);
 
   // Global plane: PCA over the accepted ground points (the model's ground normal and offset).
   detail::Moments ground_moments;
@@ -160,20 +186,17 @@ GroundSegmentation segment_ground(const Eigen::Matrix3Xd& points, const std::vec
     }
   }
   result.found = ground_moments.count >= 3;
-  Eigen::Vector3d global_centroid_local = Eigen::Vector3d::Zero();
-  Eigen::Vector3d global_normal_local = Eigen::Vector3d::UnitZ();
+  Patch global_plane;  // in the local frame; the fallback reference of points outside accepted patches
   if (result.found) {
     const detail::Principal axes = detail::principal_axes(ground_moments.covariance());
     Eigen::Vector3d normal = axes.vectors.col(0);
     if (normal.dot(up) < 0) normal = -normal;
     result.normal = normal;
     result.offset = -normal.dot(ground_moments.mean());
-    global_centroid_local = to_local * (ground_moments.mean() - sensor_origin);
-    global_normal_local = to_local * normal;
+    global_plane.centroid = to_local * (ground_moments.mean() - sensor_origin);
+    global_plane.normal = to_local * normal;
   }
-  Patch global_plane;
-  global_plane.normal = global_normal_local;
-  global_plane.centroid = global_centroid_local;
+  // Every other candidate with its height above its own accepted patch's plane, else the global one.
   for (std::size_t i = 0; i < candidates.size(); ++i) {
     const std::uint32_t index = candidates[i];
     if (is_ground[index]) {
@@ -181,8 +204,8 @@ GroundSegmentation segment_ground(const Eigen::Matrix3Xd& points, const std::vec
       continue;
     }
     const Patch* reference = &global_plane;
-    if (point_patch[i] >= 0 && patches[point_patch[i]].accepted) reference = &patches[point_patch[i]];
-    const Eigen::Vector3d p = local.col(index);
+    if (grid.point_patch[i] >= 0 && patches[grid.point_patch[i]].accepted) reference = &patches[grid.point_patch[i]];
+    const Eigen::Vector3d p = grid.local.col(index);
     const double height = result.found || reference != &global_plane ? p.z() - plane_height(*reference, p.x(), p.y()) : 1e9;
     result.other_indices.push_back(index);
     result.other_heights.push_back(static_cast<float>(height));

@@ -152,14 +152,24 @@ struct FieldTarget {
   std::vector<std::size_t> columns;  // indices into the column list (empty for "_" padding)
 };
 
-}  // namespace
-
-PointCloud read_pcd_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report) {
-  const FileBytes bytes = read_file_bytes(path);
-  const PcdHeader header = parse_pcd_header(path, bytes.view());
-  const std::size_t rows = header.points;
+// The columns a PCD header declares, one per scalar (a packed rgb/rgba field becomes red, green,
+// blue), and for each field the columns it fills. Fills report.fields.
+struct PcdColumns {
   std::vector<FieldColumn> columns;
-  std::vector<FieldTarget> targets(header.fields.size());
+  std::vector<FieldTarget> targets;  // per header field
+
+  // Stores a packed 0x00RRGGBB colour of field `f` at `row`.
+  void store_color(std::size_t f, std::size_t row, std::uint32_t packed) {
+    columns[targets[f].columns[0]].values[row] = (packed >> 16) & 0xFF;
+    columns[targets[f].columns[1]].values[row] = (packed >> 8) & 0xFF;
+    columns[targets[f].columns[2]].values[row] = packed & 0xFF;
+  }
+};
+
+PcdColumns pcd_columns(const PcdHeader& header, CloudReadReport& report) {
+  const std::size_t rows = header.points;
+  PcdColumns result;
+  result.targets.resize(header.fields.size());
   report.fields.clear();
   for (std::size_t f = 0; f < header.fields.size(); ++f) {
     const PcdField& field = header.fields[f];
@@ -167,123 +177,140 @@ PointCloud read_pcd_cloud(const std::string& path, const CloudReadOptions& optio
     report.fields.push_back(field.name);
     if (is_packed_color(field)) {
       for (const char* channel : {"red", "green", "blue"}) {
-        targets[f].columns.push_back(columns.size());
-        columns.push_back({channel, false, std::vector<double>(rows)});
+        result.targets[f].columns.push_back(result.columns.size());
+        result.columns.push_back({channel, false, std::vector<double>(rows)});
       }
       continue;
     }
     for (std::size_t c = 0; c < field.count; ++c) {
-      targets[f].columns.push_back(columns.size());
+      result.targets[f].columns.push_back(result.columns.size());
       const std::string name = field.count == 1 ? field.name : field.name + "_" + std::to_string(c);
-      columns.push_back({name, scalar_is_floating(field.scalar), std::vector<double>(rows)});
+      result.columns.push_back({name, scalar_is_floating(field.scalar), std::vector<double>(rows)});
     }
   }
-  auto unpack_color = [&](std::size_t f, std::size_t row, std::uint32_t packed) {
-    columns[targets[f].columns[0]].values[row] = (packed >> 16) & 0xFF;
-    columns[targets[f].columns[1]].values[row] = (packed >> 8) & 0xFF;
-    columns[targets[f].columns[2]].values[row] = packed & 0xFF;
-  };
+  return result;
+}
 
-  const std::size_t stride = header.point_stride;
-  const char* body = bytes.data.get() + header.body_offset;
-  const std::size_t available = bytes.size - header.body_offset;
-  if (header.data == "ascii") {
-    LineReader lines(bytes.view(), header.body_offset, header.body_first_line);
-    std::string_view line;
-    std::vector<std::string_view> tokens;
-    std::size_t expected_tokens = 0;
-    for (const PcdField& field : header.fields) expected_tokens += field.count;
-    std::size_t row = 0;
-    while (row < rows && lines.next(line)) {
-      split_tokens(line, tokens);
-      if (tokens.empty()) continue;
-      const std::string where = "line " + std::to_string(lines.line_number()) + ": ";
-      if (tokens.size() != expected_tokens)
-        throw file_error(path, where + "expected " + std::to_string(expected_tokens) + " values, found " +
-                                   std::to_string(tokens.size()));
-      std::size_t token = 0;
-      for (std::size_t f = 0; f < header.fields.size(); ++f) {
-        const PcdField& field = header.fields[f];
-        for (std::size_t c = 0; c < field.count; ++c, ++token) {
-          double value = 0;
-          if (!parse_double(tokens[token], value))
-            throw file_error(path, where + "'" + std::string(tokens[token]) + "' is not a number (field '" +
-                                       field.name + "')");
-          if (targets[f].columns.empty()) continue;
-          if (is_packed_color(field)) {
-            std::uint32_t packed = 0;
-            if (field.type == 'F') {
-              const float as_float = static_cast<float>(value);
-              std::memcpy(&packed, &as_float, 4);
-            } else {
-              packed = static_cast<std::uint32_t>(value);
-            }
-            unpack_color(f, row, packed);
-          } else {
-            columns[targets[f].columns[c]].values[row] = value;
-          }
-        }
-      }
-      ++row;
-    }
-    if (row < rows)
-      throw file_error(path, "truncated: header declares " + std::to_string(rows) + " points, the data has " +
-                                 std::to_string(row) + " lines");
-    report.encoding = "ascii";
-  } else {
-    // Binary: point-major records. binary_compressed: after LZF, field-major arrays (all x, then all y, ...).
-    std::unique_ptr<char[]> decompressed;
-    const char* data = body;
-    const bool field_major = header.data == "binary_compressed";
-    if (stride != 0 && rows > std::numeric_limits<std::size_t>::max() / stride)
-      throw file_error(path, "PCD header: POINTS x record size overflows");
-    const std::size_t needed = rows * stride;
-    if (field_major) {
-      if (available < 8) throw file_error(path, "truncated: binary_compressed data has no size words");
-      std::uint32_t compressed_size = 0, uncompressed_size = 0;
-      std::memcpy(&compressed_size, body, 4);
-      std::memcpy(&uncompressed_size, body + 4, 4);
-      if (uncompressed_size != needed)
-        throw file_error(path, "binary_compressed: uncompressed size " + std::to_string(uncompressed_size) +
-                                   " differs from POINTS x record size = " + std::to_string(needed));
-      if (compressed_size > available - 8)
-        throw file_error(path, "truncated: binary_compressed data declares " + std::to_string(compressed_size) +
-                                   " compressed bytes, only " + std::to_string(available - 8) + " follow");
-      decompressed.reset(new char[needed > 0 ? needed : 1]);
-      if (needed > 0) {
-        const unsigned int produced = pcl::lzfDecompress(body + 8, compressed_size, decompressed.get(),
-                                                         static_cast<unsigned int>(needed));
-        if (produced != needed)
-          throw file_error(path, "binary_compressed: LZF data is corrupt (decompressed " + std::to_string(produced) +
-                                     " of " + std::to_string(needed) + " bytes)");
-      }
-      data = decompressed.get();
-    } else if (available < needed) {
-      throw file_error(path, "truncated: binary data needs " + std::to_string(rows) + " points x " +
-                                 std::to_string(stride) + " bytes = " + std::to_string(needed) + " bytes, only " +
-                                 std::to_string(available) + " follow the header");
-    }
-    std::size_t field_block = 0;  // start of the current field's array in field-major data
-    std::vector<double> packed;
+// DATA ascii: one line of values per point.
+void read_pcd_ascii(const std::string& path, const FileBytes& bytes, const PcdHeader& header, PcdColumns& columns) {
+  const std::size_t rows = header.points;
+  LineReader lines(bytes.view(), header.body_offset, header.body_first_line);
+  std::string_view line;
+  std::vector<std::string_view> tokens;
+  std::size_t expected_tokens = 0;
+  for (const PcdField& field : header.fields) expected_tokens += field.count;
+  std::size_t row = 0;
+  while (row < rows && lines.next(line)) {
+    split_tokens(line, tokens);
+    if (tokens.empty()) continue;
+    const std::string where = "line " + std::to_string(lines.line_number()) + ": ";
+    if (tokens.size() != expected_tokens)
+      throw file_error(path, where + "expected " + std::to_string(expected_tokens) + " values, found " +
+                                 std::to_string(tokens.size()));
+    std::size_t token = 0;
     for (std::size_t f = 0; f < header.fields.size(); ++f) {
       const PcdField& field = header.fields[f];
-      const std::size_t element_stride = field_major ? field.size * field.count : stride;
-      const char* base = field_major ? data + field_block : data + field.offset;
-      field_block += rows * field.size * field.count;
-      if (targets[f].columns.empty()) continue;
-      if (is_packed_color(field)) {
-        packed.resize(rows);
-        decode_strided(base, element_stride, rows, ScalarType::UInt32, false, packed.data());
-        for (std::size_t row = 0; row < rows; ++row) unpack_color(f, row, static_cast<std::uint32_t>(packed[row]));
-        continue;
+      for (std::size_t c = 0; c < field.count; ++c, ++token) {
+        double value = 0;
+        if (!parse_double(tokens[token], value))
+          throw file_error(path, where + "'" + std::string(tokens[token]) + "' is not a number (field '" + field.name + "')");
+        if (columns.targets[f].columns.empty()) continue;
+        if (is_packed_color(field)) {
+          std::uint32_t packed = 0;
+          if (field.type == 'F') {
+            const float as_float = static_cast<float>(value);
+            std::memcpy(&packed, &as_float, 4);
+          } else {
+            packed = static_cast<std::uint32_t>(value);
+          }
+          columns.store_color(f, row, packed);
+        } else {
+          columns.columns[columns.targets[f].columns[c]].values[row] = value;
+        }
       }
-      for (std::size_t c = 0; c < field.count; ++c)
-        decode_strided(base + c * field.size, element_stride, rows, field.scalar, false,
-                       columns[targets[f].columns[c]].values.data());
     }
-    report.encoding = header.data;
+    ++row;
   }
-  return assemble_cloud(path, columns, rows, options, report);
+  if (row < rows)
+    throw file_error(path, "truncated: header declares " + std::to_string(rows) + " points, the data has " +
+                               std::to_string(row) + " lines");
+}
+
+// The binary body of a binary or binary_compressed PCD, checked against the header's POINTS x record
+// size; binary_compressed is LZF-decompressed into `storage`.
+const char* pcd_binary_body(const std::string& path, const FileBytes& bytes, const PcdHeader& header,
+                            std::unique_ptr<char[]>& storage) {
+  const char* body = bytes.data.get() + header.body_offset;
+  const std::size_t available = bytes.size - header.body_offset;
+  const std::size_t rows = header.points;
+  const std::size_t stride = header.point_stride;
+  if (stride != 0 && rows > std::numeric_limits<std::size_t>::max() / stride)
+    throw file_error(path, "PCD header: POINTS x record size overflows");
+  const std::size_t needed = rows * stride;
+  if (header.data != "binary_compressed") {
+    if (available < needed)
+      throw file_error(path, "truncated: binary data needs " + std::to_string(rows) + " points x " + std::to_string(stride) +
+                                 " bytes = " + std::to_string(needed) + " bytes, only " + std::to_string(available) +
+                                 " follow the header");
+    return body;
+  }
+  if (available < 8) throw file_error(path, "truncated: binary_compressed data has no size words");
+  std::uint32_t compressed_size = 0, uncompressed_size = 0;
+  std::memcpy(&compressed_size, body, 4);
+  std::memcpy(&uncompressed_size, body + 4, 4);
+  if (uncompressed_size != needed)
+    throw file_error(path, "binary_compressed: uncompressed size " + std::to_string(uncompressed_size) +
+                               " differs from POINTS x record size = " + std::to_string(needed));
+  if (compressed_size > available - 8)
+    throw file_error(path, "truncated: binary_compressed data declares " + std::to_string(compressed_size) +
+                               " compressed bytes, only " + std::to_string(available - 8) + " follow");
+  storage.reset(new char[needed > 0 ? needed : 1]);
+  if (needed > 0) {
+    const unsigned int produced =
+        pcl::lzfDecompress(body + 8, compressed_size, storage.get(), static_cast<unsigned int>(needed));
+    if (produced != needed)
+      throw file_error(path, "binary_compressed: LZF data is corrupt (decompressed " + std::to_string(produced) + " of " +
+                                 std::to_string(needed) + " bytes)");
+  }
+  return storage.get();
+}
+
+// DATA binary (point-major records) and binary_compressed (after LZF, field-major arrays: all x, then all y, ...).
+void read_pcd_binary(const std::string& path, const FileBytes& bytes, const PcdHeader& header, PcdColumns& columns) {
+  std::unique_ptr<char[]> decompressed;
+  const char* data = pcd_binary_body(path, bytes, header, decompressed);
+  const bool field_major = header.data == "binary_compressed";
+  const std::size_t rows = header.points;
+  std::size_t field_block = 0;  // start of the current field's array in field-major data
+  std::vector<double> packed;
+  for (std::size_t f = 0; f < header.fields.size(); ++f) {
+    const PcdField& field = header.fields[f];
+    const std::size_t element_stride = field_major ? field.size * field.count : header.point_stride;
+    const char* base = field_major ? data + field_block : data + field.offset;
+    field_block += rows * field.size * field.count;
+    if (columns.targets[f].columns.empty()) continue;
+    if (is_packed_color(field)) {
+      packed.resize(rows);
+      decode_strided(base, element_stride, rows, ScalarType::UInt32, false, packed.data());
+      for (std::size_t row = 0; row < rows; ++row) columns.store_color(f, row, static_cast<std::uint32_t>(packed[row]));
+      continue;
+    }
+    for (std::size_t c = 0; c < field.count; ++c)
+      decode_strided(base + c * field.size, element_stride, rows, field.scalar, false,
+                     columns.columns[columns.targets[f].columns[c]].values.data());
+  }
+}
+
+}  // namespace
+
+PointCloud read_pcd_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report) {
+  const FileBytes bytes = read_file_bytes(path);
+  const PcdHeader header = parse_pcd_header(path, bytes.view());
+  PcdColumns columns = pcd_columns(header, report);
+  if (header.data == "ascii") read_pcd_ascii(path, bytes, header, columns);
+  else read_pcd_binary(path, bytes, header, columns);
+  report.encoding = header.data;
+  return assemble_cloud(path, columns.columns, header.points, options, report);
 }
 
 void write_pcd_cloud(const std::string& path, const PointCloud& cloud, bool binary) {

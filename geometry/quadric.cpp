@@ -523,99 +523,48 @@ Quadric Quadric::transformed(const Eigen::Isometry3d& transform) const {
   return result;
 }
 
-QuadricDecomposition Quadric::decompose(const DecompositionTolerances& tolerances) const {
-  QuadricDecomposition result;
-  if (!matrix_.allFinite()) return result;
-  CenterAnalysis analysis = analyse_center(matrix_, tolerances);
-  if (analysis.rank == 0) return result;
-  // Normalisation rule (scale ambiguity): eigenvalues, m and c44 scale with Q, the centre does not.
-  const double factor = normalization_factor(matrix_, analysis);
-  analysis.eigenvalues *= factor;
-  analysis.null_residual *= factor;
-  analysis.constant *= factor;
-  analysis.max_abs_eigenvalue *= std::abs(factor);
-  for (int i = 0; i < 3; ++i) analysis.signs[i] *= factor > 0.0 ? 1 : -1;
+namespace {
 
-  // Axis order: positive eigenvalues (descending, so l_a >= l_b >= l_c for ellipsoids as in the
-  // paper), then negative ones, then zeros.
-  std::array<int, 3> order{{0, 1, 2}};
-  auto group = [&](int i) { return analysis.signs[i] > 0 ? 0 : (analysis.signs[i] < 0 ? 1 : 2); };
-  std::sort(order.begin(), order.end(), [&](int i, int j) {
-    if (group(i) != group(j)) return group(i) < group(j);
-    return std::abs(analysis.eigenvalues[i]) > std::abs(analysis.eigenvalues[j]);
-  });
-  Eigen::Matrix3d axes;
-  Eigen::Vector3d lambda;
-  int positives = 0;
-  for (int k = 0; k < 3; ++k) {
-    axes.col(k) = analysis.eigenvectors.col(order[k]);
-    lambda[k] = analysis.eigenvalues[order[k]];
-    positives += analysis.signs[order[k]] > 0;
-  }
-  const double equal_level = tolerances.equal_eigenvalues * analysis.max_abs_eigenvalue;
-  auto equal = [&](int i, int j) { return std::abs(lambda[i] - lambda[j]) <= equal_level; };
-  const int constant_sign = (!analysis.consistent || analysis.constant_is_zero) ? 0 : sign_of(analysis.constant);
-  const int rank = analysis.rank;
+// Whether sorted eigenvalues i and j are equal within `level` (the symmetry test of decompose).
+bool eigenvalues_equal(const Eigen::Vector3d& lambda, double level, int i, int j) {
+  return std::abs(lambda[i] - lambda[j]) <= level;
+}
 
-  QuadricType type = QuadricType::Imaginary;
-  CenterKind center_kind = CenterKind::NoCenter;
+// Type and centre kind from the rank of Q33, whether the centre equation (Eq. (solve t)) is
+// consistent, the count of positive eigenvalues and the sign of the constant c44 (paper Table
+// "Characteristics of typical quadrics"); equal eigenvalues tell spheres, circular cylinders and
+// circular cones from their elliptic kin.
+std::pair<QuadricType, CenterKind> classify_quadric(int rank, bool consistent, int positives, int constant_sign,
+                                                    const Eigen::Vector3d& lambda, double equal_level) {
+  const auto equal = [&](int i, int j) { return eigenvalues_equal(lambda, equal_level, i, j); };
   if (rank == 3) {
-    center_kind = CenterKind::Central;
-    if (positives == 3) {
-      type = constant_sign < 0 ? (equal(0, 2) ? QuadricType::Sphere : QuadricType::Ellipsoid)
-                               : (constant_sign == 0 ? QuadricType::Point : QuadricType::Imaginary);
-    } else {
-      type = constant_sign < 0 ? QuadricType::HyperboloidOneSheet
-                               : (constant_sign == 0 ? (equal(0, 1) ? QuadricType::CircularCone : QuadricType::EllipticCone)
-                                                     : QuadricType::HyperboloidTwoSheets);
-    }
-  } else if (rank == 2) {
-    if (analysis.consistent) {
-      center_kind = CenterKind::LinearCenter;
-      if (positives == 2) {
-        type = constant_sign < 0 ? (equal(0, 1) ? QuadricType::CircularCylinder : QuadricType::EllipticCylinder)
-                                 : (constant_sign == 0 ? QuadricType::Line : QuadricType::Imaginary);
-      } else {
-        type = constant_sign == 0 ? QuadricType::IntersectingPlanes : QuadricType::HyperbolicCylinder;
-      }
-    } else {
-      type = positives == 2 ? QuadricType::EllipticParaboloid : QuadricType::HyperbolicParaboloid;
-    }
-  } else {
-    if (analysis.consistent) {
-      center_kind = CenterKind::PlanarCenter;
-      type = constant_sign < 0 ? QuadricType::ParallelPlanes
-                               : (constant_sign == 0 ? QuadricType::Plane : QuadricType::Imaginary);
-    } else {
-      type = QuadricType::ParabolicCylinder;
-    }
+    if (positives == 3)
+      return {constant_sign < 0 ? (equal(0, 2) ? QuadricType::Sphere : QuadricType::Ellipsoid)
+                                : (constant_sign == 0 ? QuadricType::Point : QuadricType::Imaginary),
+              CenterKind::Central};
+    return {constant_sign < 0 ? QuadricType::HyperboloidOneSheet
+                              : (constant_sign == 0 ? (equal(0, 1) ? QuadricType::CircularCone : QuadricType::EllipticCone)
+                                                    : QuadricType::HyperboloidTwoSheets),
+            CenterKind::Central};
   }
-
-  result.type = type;
-  result.center_kind = center_kind;
-  result.rank_q33 = rank;
-  result.rank_q = analysis.consistent ? rank + (constant_sign != 0 ? 1 : 0) : rank + 2;
-  result.eigenvalues = lambda;
-  result.constant = analysis.consistent ? analysis.constant : 0.0;
-  result.indicators = degeneracy_indicators(type);
-  result.center = analysis.center;
-
-  // Geometric sign of the axis along which a paraboloid opens (Eq. (solve t) has no solution).
-  std::array<bool, 3> geometric{{false, false, false}};
-  const double residual_norm = analysis.null_residual.norm();
-  const double vertex_shift = residual_norm > 0.0 ? analysis.constant / (2.0 * residual_norm) : 0.0;
-  if (type == QuadricType::EllipticParaboloid || type == QuadricType::HyperbolicParaboloid) {
-    axes.col(2) = -analysis.null_residual / residual_norm;
-    geometric[2] = true;
-    result.center = analysis.center + vertex_shift * axes.col(2);  // the vertex
-  } else if (type == QuadricType::ParabolicCylinder) {
-    axes.col(1) = -analysis.null_residual / residual_norm;
-    geometric[1] = true;
-    axes.col(2) = axes.col(0).cross(axes.col(1));
+  if (rank == 2) {
+    if (!consistent)
+      return {positives == 2 ? QuadricType::EllipticParaboloid : QuadricType::HyperbolicParaboloid, CenterKind::NoCenter};
+    if (positives == 2)
+      return {constant_sign < 0 ? (equal(0, 1) ? QuadricType::CircularCylinder : QuadricType::EllipticCylinder)
+                                : (constant_sign == 0 ? QuadricType::Line : QuadricType::Imaginary),
+              CenterKind::LinearCenter};
+    return {constant_sign == 0 ? QuadricType::IntersectingPlanes : QuadricType::HyperbolicCylinder, CenterKind::LinearCenter};
   }
+  if (!consistent) return {QuadricType::ParabolicCylinder, CenterKind::NoCenter};
+  return {constant_sign < 0 ? QuadricType::ParallelPlanes : (constant_sign == 0 ? QuadricType::Plane : QuadricType::Imaginary),
+          CenterKind::PlanarCenter};
+}
 
-  // Scales, Eq. (geometry analysis): s = diag(I_s) sqrt(|1/l|) with |c44| = 1 after normalisation;
-  // cones and intersecting planes (c44 = 0) give tangents of half-angles; paraboloids sqrt(|m|/|l|).
+// Scales, Eq. (geometry analysis): s = sqrt(|1/l|) with |c44| = 1 after normalisation; cones and
+// intersecting planes (c44 = 0) give tangents of half-angles; paraboloids sqrt(|m|/|l|). Before the
+// I_s mask.
+Eigen::Vector3d canonical_scales(QuadricType type, const Eigen::Vector3d& lambda, double residual_norm) {
   Eigen::Vector3d scale = Eigen::Vector3d::Zero();
   switch (type) {
     case QuadricType::Sphere:
@@ -651,31 +600,99 @@ QuadricDecomposition Quadric::decompose(const DecompositionTolerances& tolerance
     default:
       break;
   }
-  result.scale = scale.cwiseProduct(result.indicators.scale);
+  return scale;
+}
 
-  // Symmetry: equal eigenvalues leave only the unique axis defined (paper §"Quadric Degeneracy").
+// Symmetry: equal eigenvalues leave only the unique axis defined (paper §"Quadric Degeneracy"),
+// which narrows the rotation indicator I_R of ellipsoids, hyperboloids and elliptic paraboloids.
+void narrow_rotation_indicator(QuadricType type, const Eigen::Vector3d& lambda, double equal_level,
+                               Eigen::Vector3d& rotation_indicator) {
+  const auto equal = [&](int i, int j) { return eigenvalues_equal(lambda, equal_level, i, j); };
   if (type == QuadricType::Ellipsoid) {
-    if (equal(0, 1)) result.indicators.rotation = Eigen::Vector3d(0, 0, 1);
-    else if (equal(1, 2)) result.indicators.rotation = Eigen::Vector3d(1, 0, 0);
+    if (equal(0, 1)) rotation_indicator = Eigen::Vector3d(0, 0, 1);
+    else if (equal(1, 2)) rotation_indicator = Eigen::Vector3d(1, 0, 0);
   } else if (type == QuadricType::HyperboloidOneSheet || type == QuadricType::HyperboloidTwoSheets ||
              type == QuadricType::EllipticParaboloid) {
-    if (equal(0, 1)) result.indicators.rotation = Eigen::Vector3d(0, 0, 1);
+    if (equal(0, 1)) rotation_indicator = Eigen::Vector3d(0, 0, 1);
   }
+}
 
-  // Rotation R_q = +/- R_hat diag(I_R): defined axes sign-normalised (largest component positive,
-  // except a paraboloid's opening axis), undefined axes completed deterministically, det = +1.
+// Rotation R_q = +/- R_hat diag(I_R): defined axes sign-normalised (largest component positive,
+// except a paraboloid's opening axis, `geometric`), undefined axes completed deterministically, det = +1.
+Eigen::Matrix3d normalised_rotation(Eigen::Matrix3d axes, const Eigen::Vector3d& rotation_indicator, QuadricType type,
+                                    const std::array<bool, 3>& geometric) {
   std::array<bool, 3> defined{{false, false, false}};
-  for (int k = 0; k < 3; ++k) defined[k] = result.indicators.rotation[k] > 0.5 || type == QuadricType::Imaginary;
+  for (int k = 0; k < 3; ++k) defined[k] = rotation_indicator[k] > 0.5 || type == QuadricType::Imaginary;
   for (int k = 0; k < 3; ++k)
     if (defined[k] && !geometric[k]) axes.col(k) = largest_component_positive(axes.col(k));
-  const int defined_count = int(defined[0]) + int(defined[1]) + int(defined[2]);
-  if (defined_count == 3) {
-    if (geometric[2]) axes.col(1) = axes.col(2).cross(axes.col(0));
-    else axes.col(2) = axes.col(0).cross(axes.col(1));
-    result.rotation = axes;
-  } else {
-    result.rotation = complete_rotation(axes, defined);
+  if (!(defined[0] && defined[1] && defined[2])) return complete_rotation(axes, defined);
+  if (geometric[2]) axes.col(1) = axes.col(2).cross(axes.col(0));
+  else axes.col(2) = axes.col(0).cross(axes.col(1));
+  return axes;
+}
+
+}  // namespace
+
+QuadricDecomposition Quadric::decompose(const DecompositionTolerances& tolerances) const {
+  QuadricDecomposition result;
+  if (!matrix_.allFinite()) return result;
+  CenterAnalysis analysis = analyse_center(matrix_, tolerances);
+  if (analysis.rank == 0) return result;
+  // Normalisation rule (scale ambiguity): eigenvalues, m and c44 scale with Q, the centre does not.
+  const double factor = normalization_factor(matrix_, analysis);
+  analysis.eigenvalues *= factor;
+  analysis.null_residual *= factor;
+  analysis.constant *= factor;
+  analysis.max_abs_eigenvalue *= std::abs(factor);
+  for (int i = 0; i < 3; ++i) analysis.signs[i] *= factor > 0.0 ? 1 : -1;
+
+  // Axis order: positive eigenvalues (descending, so l_a >= l_b >= l_c for ellipsoids as in the
+  // paper), then negative ones, then zeros.
+  std::array<int, 3> order{{0, 1, 2}};
+  auto group = [&](int i) { return analysis.signs[i] > 0 ? 0 : (analysis.signs[i] < 0 ? 1 : 2); };
+  std::sort(order.begin(), order.end(), [&](int i, int j) {
+    if (group(i) != group(j)) return group(i) < group(j);
+    return std::abs(analysis.eigenvalues[i]) > std::abs(analysis.eigenvalues[j]);
+  });
+  Eigen::Matrix3d axes;
+  Eigen::Vector3d lambda;
+  int positives = 0;
+  for (int k = 0; k < 3; ++k) {
+    axes.col(k) = analysis.eigenvectors.col(order[k]);
+    lambda[k] = analysis.eigenvalues[order[k]];
+    positives += analysis.signs[order[k]] > 0;
   }
+  const double equal_level = tolerances.equal_eigenvalues * analysis.max_abs_eigenvalue;
+  const int constant_sign = (!analysis.consistent || analysis.constant_is_zero) ? 0 : sign_of(analysis.constant);
+  const int rank = analysis.rank;
+  const auto [type, center_kind] = classify_quadric(rank, analysis.consistent, positives, constant_sign, lambda, equal_level);
+
+  result.type = type;
+  result.center_kind = center_kind;
+  result.rank_q33 = rank;
+  result.rank_q = analysis.consistent ? rank + (constant_sign != 0 ? 1 : 0) : rank + 2;
+  result.eigenvalues = lambda;
+  result.constant = analysis.consistent ? analysis.constant : 0.0;
+  result.indicators = degeneracy_indicators(type);
+  result.center = analysis.center;
+
+  // Geometric sign of the axis along which a paraboloid opens (Eq. (solve t) has no solution).
+  std::array<bool, 3> geometric{{false, false, false}};
+  const double residual_norm = analysis.null_residual.norm();
+  const double vertex_shift = residual_norm > 0.0 ? analysis.constant / (2.0 * residual_norm) : 0.0;
+  if (type == QuadricType::EllipticParaboloid || type == QuadricType::HyperbolicParaboloid) {
+    axes.col(2) = -analysis.null_residual / residual_norm;
+    geometric[2] = true;
+    result.center = analysis.center + vertex_shift * axes.col(2);  // the vertex
+  } else if (type == QuadricType::ParabolicCylinder) {
+    axes.col(1) = -analysis.null_residual / residual_norm;
+    geometric[1] = true;
+    axes.col(2) = axes.col(0).cross(axes.col(1));
+  }
+
+  result.scale = canonical_scales(type, lambda, residual_norm).cwiseProduct(result.indicators.scale);
+  narrow_rotation_indicator(type, lambda, equal_level, result.indicators.rotation);
+  result.rotation = normalised_rotation(axes, result.indicators.rotation, type, geometric);
   if (type == QuadricType::ParabolicCylinder) {
     // Vertex line: move along the opening axis to the vertex, then take its minimum-norm point.
     Eigen::Vector3d vertex = analysis.center + vertex_shift * result.rotation.col(1);
