@@ -209,6 +209,119 @@ ExtractionResult extract_elements(const PointCloud& cloud, const ExtractionOptio
 
 namespace detail {
 
+namespace {
+
+// Static scans: CGAL Efficient RANSAC shapes on the points in range (detect_shapes), with the
+// cloud's own normals when it carries nx, ny, nz.
+ExtractionResult extract_static_scan(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
+                                     const std::vector<std::uint32_t>& in_range, const ExtractionOptions& options) {
+  Eigen::Matrix3Xd normals;
+  const auto nx = cloud.extra_fields.find("nx"), ny = cloud.extra_fields.find("ny"), nz = cloud.extra_fields.find("nz");
+  if (nx != cloud.extra_fields.end() && ny != cloud.extra_fields.end() && nz != cloud.extra_fields.end()) {
+    normals.resize(3, static_cast<Eigen::Index>(in_range.size()));
+    for (std::size_t i = 0; i < in_range.size(); ++i)
+      normals.col(static_cast<Eigen::Index>(i)) =
+          Eigen::Vector3d(nx->second[in_range[i]], ny->second[in_range[i]], nz->second[in_range[i]]);
+  }
+  ExtractionResult shapes = detect_shapes(detail::gather_points(points, in_range), normals, options);
+  for (Element& element : shapes.elements)
+    for (std::uint32_t& index : element.point_indices) index = in_range[index];
+  shapes.points_in_range = in_range.size();
+  return shapes;
+}
+
+// The elements extracted so far, by group.
+struct ElementGroups {
+  std::vector<Element> planes, lines, objects;
+};
+
+// Labels semantic mode: the given per-point classes decide; ground is the ground class, planes are
+// extracted among the plane class, and each Euclidean cluster of a labelled class is one element.
+ElementGroups extract_with_labels(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& in_range,
+                                  const std::vector<std::uint32_t>& labels, const ExtractionOptions& options,
+                                  const Eigen::Vector3d& up, ExtractionResult& result) {
+  ElementGroups groups;
+  auto stage = Clock::now();
+  std::vector<std::uint32_t> ground;
+  std::vector<std::uint32_t> per_class[11];
+  for (const std::uint32_t index : in_range) {
+    ElementClass element_class;
+    if (!element_class_for_semantic_kitti_label(labels[index], element_class)) continue;
+    if (element_class == ElementClass::Ground)
+      ground.push_back(index);
+    else
+      per_class[static_cast<int>(element_class)].push_back(index);
+  }
+  set_ground(result, points, ground, up, nullptr);
+  result.timings_ms["ground"] = detail::elapsed_ms(stage);
+  stage = Clock::now();
+  std::vector<std::uint32_t> remaining;
+  groups.planes = extract_planes(points, per_class[static_cast<int>(ElementClass::Plane)], options.planes, remaining);
+  result.timings_ms["planes"] = detail::elapsed_ms(stage);
+  stage = Clock::now();
+  for (const ElementClass element_class :
+       {ElementClass::Line, ElementClass::Vehicle, ElementClass::Trunk, ElementClass::Vegetation}) {
+    for (auto& cluster : euclidean_clusters(points, per_class[static_cast<int>(element_class)], options.clusters)) {
+      Element element;
+      element.element_class = element_class;
+      element.point_indices = std::move(cluster);
+      (element_class == ElementClass::Line ? groups.lines : groups.objects).push_back(std::move(element));
+    }
+  }
+  result.timings_ms["clusters"] = detail::elapsed_ms(stage);
+  return groups;
+}
+
+// Geometry-only mode (paper §"Quadric Extraction", step 1): ground segmentation, planes by voxel
+// region growing, Euclidean clusters kept by size and height above the ground, then lines (poles,
+// trunks) and objects among them.
+ElementGroups extract_geometric(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& in_range,
+                                const ExtractionOptions& options, const Eigen::Vector3d& up, ExtractionResult& result) {
+  ElementGroups groups;
+  auto stage = Clock::now();
+  const GroundSegmentation ground = segment_ground(points, in_range, options.ground, options.sensor_origin, up);
+  if (ground.found) set_ground(result, points, ground.ground_indices, up, &ground);
+  result.timings_ms["ground"] = detail::elapsed_ms(stage);
+  std::vector<float> height_of_point(static_cast<std::size_t>(points.cols()), 1e9f);
+  for (std::size_t i = 0; i < ground.other_indices.size(); ++i) height_of_point[ground.other_indices[i]] = ground.other_heights[i];
+
+  stage = Clock::now();
+  std::vector<std::uint32_t> remaining;
+  groups.planes = extract_planes(points, ground.other_indices, options.planes, remaining);
+  result.timings_ms["planes"] = detail::elapsed_ms(stage);
+
+  stage = Clock::now();
+  std::vector<std::vector<std::uint32_t>> clusters = euclidean_clusters(points, remaining, options.clusters);
+  clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
+                                [&](const auto& cluster) {
+                                  return !keep_cluster(points, cluster, ground.found ? height_of_point : std::vector<float>(),
+                                                       options.clusters);
+                                }),
+                 clusters.end());
+  result.timings_ms["clusters"] = detail::elapsed_ms(stage);
+  stage = Clock::now();
+  lines_and_objects(points, in_range, clusters, options, up, groups.lines, groups.objects);
+  result.timings_ms["lines"] = detail::elapsed_ms(stage);
+  return groups;
+}
+
+// The extraction's status and message from what was found among `points_in_range` points.
+void describe_extraction(ExtractionResult& result, std::size_t points_in_range) {
+  if (result.elements.empty()) {
+    result.status = ExtractionStatus::NoElements;
+    result.message = "no ground, plane, line or cluster passed the size tests among " + std::to_string(points_in_range) +
+                     " points in range";
+  } else if (!result.has_ground) {
+    result.status = ExtractionStatus::NoGround;
+    result.message = "no ground found; planes, lines and objects were still extracted";
+  } else if (result.elements.size() == 1) {
+    result.message = "only the ground was found: no plane, line or cluster passed the size tests among the " +
+                     std::to_string(points_in_range - result.elements.front().point_indices.size()) + " other points";
+  }
+}
+
+}  // namespace
+
 ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
                                             const ExtractionOptions& options, const std::vector<std::uint32_t>& labels) {
   const auto start = Clock::now();
@@ -234,95 +347,17 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
                                          std::to_string(options.maximum_range) + " m)";
     return result;
   }
-
   if (options.static_scan) {
-    Eigen::Matrix3Xd normals;
-    const auto nx = cloud.extra_fields.find("nx"), ny = cloud.extra_fields.find("ny"), nz = cloud.extra_fields.find("nz");
-    if (nx != cloud.extra_fields.end() && ny != cloud.extra_fields.end() && nz != cloud.extra_fields.end()) {
-      normals.resize(3, static_cast<Eigen::Index>(in_range.size()));
-      for (std::size_t i = 0; i < in_range.size(); ++i)
-        normals.col(static_cast<Eigen::Index>(i)) =
-            Eigen::Vector3d(nx->second[in_range[i]], ny->second[in_range[i]], nz->second[in_range[i]]);
-    }
-    ExtractionResult shapes = detect_shapes(detail::gather_points(points, in_range), normals, options);
-    for (Element& element : shapes.elements)
-      for (std::uint32_t& index : element.point_indices) index = in_range[index];
-    shapes.points_in_range = in_range.size();
+    ExtractionResult shapes = extract_static_scan(points, cloud, in_range, options);
     shapes.timings_ms["crop"] = result.timings_ms["crop"];
     return shapes;
   }
-
-  std::vector<Element> planes, lines, objects;
-  if (options.semantic_mode == SemanticMode::Labels) {
-    auto stage = Clock::now();
-    std::vector<std::uint32_t> ground;
-    std::vector<std::uint32_t> per_class[11];
-    for (const std::uint32_t index : in_range) {
-      ElementClass element_class;
-      if (!element_class_for_semantic_kitti_label(labels[index], element_class)) continue;
-      if (element_class == ElementClass::Ground)
-        ground.push_back(index);
-      else
-        per_class[static_cast<int>(element_class)].push_back(index);
-    }
-    set_ground(result, points, ground, up, nullptr);
-    result.timings_ms["ground"] = detail::elapsed_ms(stage);
-    stage = Clock::now();
-    std::vector<std::uint32_t> remaining;
-    planes = extract_planes(points, per_class[static_cast<int>(ElementClass::Plane)], options.planes, remaining);
-    result.timings_ms["planes"] = detail::elapsed_ms(stage);
-    stage = Clock::now();
-    // Labelled classes: each Euclidean cluster of a class is one element of that class.
-    for (const ElementClass element_class :
-         {ElementClass::Line, ElementClass::Vehicle, ElementClass::Trunk, ElementClass::Vegetation}) {
-      for (auto& cluster : euclidean_clusters(points, per_class[static_cast<int>(element_class)], options.clusters)) {
-        Element element;
-        element.element_class = element_class;
-        element.point_indices = std::move(cluster);
-        (element_class == ElementClass::Line ? lines : objects).push_back(std::move(element));
-      }
-    }
-    result.timings_ms["clusters"] = detail::elapsed_ms(stage);
-  } else {
-    auto stage = Clock::now();
-    const GroundSegmentation ground = segment_ground(points, in_range, options.ground, options.sensor_origin, up);
-    if (ground.found) set_ground(result, points, ground.ground_indices, up, &ground);
-    result.timings_ms["ground"] = detail::elapsed_ms(stage);
-    std::vector<float> height_of_point(static_cast<std::size_t>(points.cols()), 1e9f);
-    for (std::size_t i = 0; i < ground.other_indices.size(); ++i)
-      height_of_point[ground.other_indices[i]] = ground.other_heights[i];
-
-    stage = Clock::now();
-    std::vector<std::uint32_t> remaining;
-    planes = extract_planes(points, ground.other_indices, options.planes, remaining);
-    result.timings_ms["planes"] = detail::elapsed_ms(stage);
-
-    stage = Clock::now();
-    std::vector<std::vector<std::uint32_t>> clusters = euclidean_clusters(points, remaining, options.clusters);
-    clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
-                                  [&](const auto& cluster) {
-                                    return !keep_cluster(points, cluster, ground.found ? height_of_point : std::vector<float>(),
-                                                         options.clusters);
-                                  }),
-                   clusters.end());
-    result.timings_ms["clusters"] = detail::elapsed_ms(stage);
-    stage = Clock::now();
-    lines_and_objects(points, in_range, clusters, options, up, lines, objects);
-    result.timings_ms["lines"] = detail::elapsed_ms(stage);
-  }
-  for (auto* group : {&planes, &lines, &objects})
+  ElementGroups groups = options.semantic_mode == SemanticMode::Labels
+                             ? extract_with_labels(points, in_range, labels, options, up, result)
+                             : extract_geometric(points, in_range, options, up, result);
+  for (auto* group : {&groups.planes, &groups.lines, &groups.objects})
     for (Element& element : *group) result.elements.push_back(std::move(element));
-  if (result.elements.empty()) {
-    result.status = ExtractionStatus::NoElements;
-    result.message = "no ground, plane, line or cluster passed the size tests among " +
-                     std::to_string(in_range.size()) + " points in range";
-  } else if (!result.has_ground) {
-    result.status = ExtractionStatus::NoGround;
-    result.message = "no ground found; planes, lines and objects were still extracted";
-  } else if (result.elements.size() == 1) {
-    result.message = "only the ground was found: no plane, line or cluster passed the size tests among the " +
-                     std::to_string(in_range.size() - result.elements.front().point_indices.size()) + " other points";
-  }
+  describe_extraction(result, in_range.size());
   result.timings_ms["extraction"] = detail::elapsed_ms(start);
   return result;
 }
