@@ -3,6 +3,7 @@
 #include "estimation/registration_config.h"
 
 #include "fitting/quadric_fitter.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <Eigen/Eigenvalues>
@@ -478,7 +479,7 @@ double normal_support(const std::vector<PlanarVoxel>& voxels, const Eigen::Vecto
 }  // namespace
 
 UpDirectionEstimate estimate_up_direction(const PointCloud& cloud) {
-  constexpr double kDegrees = 180.0 / M_PI;
+  constexpr double kDegrees = 180.0 / kPi;
   UpDirectionEstimate estimate;
   std::vector<double> ranges;
   const std::size_t stride = std::max<std::size_t>(1, cloud.size() / 20000);
@@ -548,6 +549,86 @@ UpDirectionEstimate estimate_up_direction(const PointCloud& cloud) {
   return estimate;
 }
 
+namespace {
+
+// Rings: maximal runs of occupied elevation bins separated by empty bins, among the sorted
+// elevations between `low` and `high` (degrees). Bins are 0.05 deg, wider for sparse clouds so that
+// they hold at least ~20 points on average; a bin is occupied when it holds more than half the mean
+// count (ring bins hold many times the mean, while a non-repetitive scanner fills the span evenly).
+// A filled span (more than 70% of bins occupied) is not a ring structure: 0.
+int count_elevation_rings(const std::vector<double>& elevations, double low, double high) {
+  const double bin_width = std::max(0.05, 20.0 * (high - low) / static_cast<double>(elevations.size()));
+  const int bin_count = std::max(1, static_cast<int>(std::ceil((high - low) / bin_width)) + 1);
+  std::vector<std::size_t> histogram(static_cast<std::size_t>(bin_count), 0);
+  for (const double elevation : elevations)
+    if (elevation >= low && elevation <= high)
+      ++histogram[static_cast<std::size_t>(std::min(bin_count - 1, static_cast<int>((elevation - low) / bin_width)))];
+  const std::size_t occupied_threshold = std::max<std::size_t>(2, elevations.size() / (2 * static_cast<std::size_t>(bin_count)));
+  bool inside = false;
+  int runs = 0;
+  int occupied = 0;
+  for (const std::size_t count : histogram) {
+    const bool is_occupied = count > occupied_threshold;
+    occupied += is_occupied ? 1 : 0;
+    if (is_occupied && !inside) ++runs;
+    inside = is_occupied;
+  }
+  return occupied > 0.7 * bin_count ? 0 : runs;
+}
+
+// Azimuth coverage, median range, elevation span and rings of `cloud`, in its own frame.
+void measure_sensor_geometry(const PointCloud& cloud, SensorGuess& guess) {
+  constexpr double kDegrees = 180.0 / kPi;
+  std::vector<char> azimuth_bins(360, 0);
+  std::vector<double> ranges;
+  std::vector<double> elevations;  // of points beyond 10 m (the rings are sharp there)
+  ranges.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d p = cloud.point(i);
+    const double horizontal = std::hypot(p.x(), p.y());
+    const double range = p.norm();
+    ranges.push_back(range);
+    if (horizontal > 0.5) {
+      const int bin = static_cast<int>(std::floor((std::atan2(p.y(), p.x()) * kDegrees + 180.0))) % 360;
+      azimuth_bins[static_cast<std::size_t>(std::max(0, bin))] = 1;
+    }
+    if (range > 10.0) elevations.push_back(std::atan2(p.z(), horizontal) * kDegrees);
+  }
+  guess.azimuth_coverage = static_cast<double>(std::count(azimuth_bins.begin(), azimuth_bins.end(), 1)) / 360.0;
+  std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2), ranges.end());
+  guess.median_range = ranges[ranges.size() / 2];
+  if (elevations.size() < 100) return;
+  std::sort(elevations.begin(), elevations.end());
+  const double low = elevations[elevations.size() / 100];
+  const double high = elevations[elevations.size() * 99 / 100];
+  guess.elevation_span_degrees = high - low;
+  guess.ring_count = count_elevation_rings(elevations, low, high);
+}
+
+// The preset rule of guess_sensor_preset on the measured geometry; appends the rule that chose to `reason`.
+std::string choose_preset(const SensorGuess& guess, std::ostringstream& reason) {
+  if (guess.azimuth_coverage < 0.5) {
+    reason << "narrow horizontal field of view (< 50%): avia";
+    return "avia";
+  }
+  if (guess.point_count > 1500000) {
+    reason << "more than 1.5 M points: static scan, monument";
+    return "monument";
+  }
+  if (guess.elevation_span_degrees < 35.0) {
+    // A spinning multi-beam scanner looks at a narrow elevation band (HDL-64E 27 deg, VLP-16 30 deg);
+    // its density (or ring count, when the rings are separable) tells a 64-beam from a 16-beam head.
+    const bool dense = guess.point_count >= 60000 || guess.ring_count >= 48;
+    reason << "narrow elevation span (< 35 deg) of a spinning scanner, "
+           << (dense ? ">= 60 k points or >= 48 rings: vlp64" : "< 60 k points and < 48 rings: vlp16");
+    return dense ? "vlp64" : "vlp16";
+  }
+  reason << "360 deg coverage and a tall (>= 35 deg) elevation span of a non-repetitive scanner: mid360";
+  return "mid360";
+}
+
+}  // namespace
+
 SensorGuess guess_sensor_preset(const PointCloud& cloud) {
   SensorGuess guess;
   guess.point_count = cloud.size();
@@ -583,77 +664,14 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
   // cloud's own frame (a tilted spinning LiDAR keeps its rings there); the up axis only tells the
   // extraction where the ground is.
   guess.up = estimate_up_direction(cloud);
-  constexpr double kDegrees = 180.0 / M_PI;
-  std::vector<char> azimuth_bins(360, 0);
-  std::vector<double> ranges;
-  std::vector<double> elevations;  // of points beyond 10 m (the rings are sharp there)
-  ranges.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3d p = cloud.point(i);
-    const double horizontal = std::hypot(p.x(), p.y());
-    const double range = p.norm();
-    ranges.push_back(range);
-    if (horizontal > 0.5) {
-      const int bin = static_cast<int>(std::floor((std::atan2(p.y(), p.x()) * kDegrees + 180.0))) % 360;
-      azimuth_bins[static_cast<std::size_t>(std::max(0, bin))] = 1;
-    }
-    if (range > 10.0) elevations.push_back(std::atan2(p.z(), horizontal) * kDegrees);
-  }
   guess.near_field_fraction = near_field_fraction;
-  guess.azimuth_coverage = static_cast<double>(std::count(azimuth_bins.begin(), azimuth_bins.end(), 1)) / 360.0;
-  std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2), ranges.end());
-  guess.median_range = ranges[ranges.size() / 2];
-  if (elevations.size() >= 100) {
-    std::sort(elevations.begin(), elevations.end());
-    const double low = elevations[elevations.size() / 100];
-    const double high = elevations[elevations.size() * 99 / 100];
-    guess.elevation_span_degrees = high - low;
-    // Rings: maximal runs of occupied elevation bins (0.05 deg, wider for sparse clouds) separated by empty bins. A bin is occupied
-    // when it holds more than half the mean count per bin: ring bins hold many times the mean, while a
-    // non-repetitive scanner fills the span evenly (even when sparse, where fixed thresholds see noise as rings).
-    // Bins hold at least ~20 points on average, so sparse clouds do not turn counting noise into rings.
-    const double bin_width = std::max(0.05, 20.0 * (high - low) / static_cast<double>(elevations.size()));
-    const int bin_count = std::max(1, static_cast<int>(std::ceil((high - low) / bin_width)) + 1);
-    std::vector<std::size_t> histogram(static_cast<std::size_t>(bin_count), 0);
-    for (const double elevation : elevations)
-      if (elevation >= low && elevation <= high)
-        ++histogram[static_cast<std::size_t>(std::min(bin_count - 1, static_cast<int>((elevation - low) / bin_width)))];
-    const std::size_t occupied_threshold =
-        std::max<std::size_t>(2, elevations.size() / (2 * static_cast<std::size_t>(bin_count)));
-    bool inside = false;
-    int runs = 0;
-    int occupied = 0;
-    for (const std::size_t count : histogram) {
-      const bool is_occupied = count > occupied_threshold;
-      occupied += is_occupied ? 1 : 0;
-      if (is_occupied && !inside) ++runs;
-      inside = is_occupied;
-    }
-    // A filled span (more than 70% of bins occupied) is not a ring structure.
-    guess.ring_count = occupied > 0.7 * bin_count ? 0 : runs;
-  }
+  measure_sensor_geometry(cloud, guess);
   std::ostringstream reason;
   reason.precision(3);
   reason << guess.point_count << " points, azimuth coverage " << 100.0 * guess.azimuth_coverage << "%, "
          << guess.ring_count << " elevation rings over " << guess.elevation_span_degrees << " deg, median range "
          << guess.median_range << " m -> ";
-  if (guess.azimuth_coverage < 0.5) {
-    guess.preset = "avia";
-    reason << "narrow horizontal field of view (< 50%): avia";
-  } else if (guess.point_count > 1500000) {
-    guess.preset = "monument";
-    reason << "more than 1.5 M points: static scan, monument";
-  } else if (guess.elevation_span_degrees < 35.0) {
-    // A spinning multi-beam scanner looks at a narrow elevation band (HDL-64E 27 deg, VLP-16 30 deg);
-    // its density (or ring count, when the rings are separable) tells a 64-beam from a 16-beam head.
-    const bool dense = guess.point_count >= 60000 || guess.ring_count >= 48;
-    guess.preset = dense ? "vlp64" : "vlp16";
-    reason << "narrow elevation span (< 35 deg) of a spinning scanner, "
-           << (dense ? ">= 60 k points or >= 48 rings: vlp64" : "< 60 k points and < 48 rings: vlp16");
-  } else {
-    guess.preset = "mid360";
-    reason << "360 deg coverage and a tall (>= 35 deg) elevation span of a non-repetitive scanner: mid360";
-  }
+  guess.preset = choose_preset(guess, reason);
   guess.minimum_range = extraction_preset(guess.preset).minimum_range;
   guess.reason = reason.str();
   return guess;
