@@ -160,26 +160,41 @@ std::vector<std::vector<std::uint32_t>> cluster_planes(const Eigen::Matrix3Xd& p
 
 namespace {
 
-std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
-                                          const PlaneOptions& options, std::vector<std::uint32_t>& remaining) {
+// The candidates in voxels of options.voxel_size, each with its points' moments.
+struct VoxelGrid {
   std::vector<Voxel> voxels;
   std::unordered_map<std::uint64_t, int> voxel_of_key;
-  voxel_of_key.reserve(candidates.size() / 4 + 16);
-  const double inverse = 1.0 / options.voxel_size;
+
+  // Index of the voxel at integer coordinate `c`, or -1.
+  int find(const Eigen::Vector3i& c) const {
+    const auto it = voxel_of_key.find(detail::voxel_key(c.x(), c.y(), c.z()));
+    return it == voxel_of_key.end() ? -1 : it->second;
+  }
+};
+
+VoxelGrid build_voxels(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates, double voxel_size) {
+  VoxelGrid grid;
+  grid.voxel_of_key.reserve(candidates.size() / 4 + 16);
+  const double inverse = 1.0 / voxel_size;
   for (const std::uint32_t index : candidates) {
     const Eigen::Vector3d p = points.col(index);
     const Eigen::Vector3i c((p * inverse).array().floor().cast<int>());
     const std::uint64_t key = detail::voxel_key(c.x(), c.y(), c.z());
-    auto [it, inserted] = voxel_of_key.try_emplace(key, static_cast<int>(voxels.size()));
+    auto [it, inserted] = grid.voxel_of_key.try_emplace(key, static_cast<int>(grid.voxels.size()));
     if (inserted) {
-      voxels.emplace_back();
-      voxels.back().coordinate = c;
+      grid.voxels.emplace_back();
+      grid.voxels.back().coordinate = c;
     }
-    Voxel& voxel = voxels[it->second];
+    Voxel& voxel = grid.voxels[it->second];
     voxel.members.push_back(index);
     voxel.moments.add(p);
   }
-  // Eigenvalue-ratio test per voxel (ratio of the second smallest to the smallest eigenvalue).
+  return grid;
+}
+
+// Eigenvalue-ratio test per voxel (ratio of the second smallest to the smallest eigenvalue): marks
+// planar voxels with their normals and returns them, largest first (the seeds of region growing).
+std::vector<int> planar_voxels_by_size(std::vector<Voxel>& voxels, const PlaneOptions& options) {
   std::vector<int> planar_order;
   for (int id = 0; id < static_cast<int>(voxels.size()); ++id) {
     Voxel& voxel = voxels[id];
@@ -192,6 +207,81 @@ std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const 
   }
   std::sort(planar_order.begin(), planar_order.end(),
             [&](int a, int b) { return voxels[a].members.size() > voxels[b].members.size(); });
+  return planar_order;
+}
+
+// Grows region `region` from planar voxel `seed` over 26-neighbours whose normal agrees within
+// normal_cosine and whose centroid lies within merge_distance of the growing plane (refitted after
+// every voxel). Returns the region's voxels; `moments` ends as the region's points' moments.
+std::vector<int> grow_plane_region(VoxelGrid& grid, int seed, int region, const PlaneOptions& options,
+                                   detail::Moments& moments) {
+  std::vector<Voxel>& voxels = grid.voxels;
+  moments = voxels[seed].moments;
+  Eigen::Vector3d normal = voxels[seed].normal;
+  Eigen::Vector3d center = moments.mean();
+  std::vector<int> members = {seed};
+  voxels[seed].region = region;
+  std::queue<int> queue;
+  queue.push(seed);
+  while (!queue.empty()) {
+    const Eigen::Vector3i coordinate = voxels[queue.front()].coordinate;
+    queue.pop();
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          if (dx == 0 && dy == 0 && dz == 0) continue;
+          const int id = grid.find(coordinate + Eigen::Vector3i(dx, dy, dz));
+          if (id < 0) continue;
+          Voxel& neighbour = voxels[id];
+          if (!neighbour.planar || neighbour.region >= 0) continue;
+          if (std::abs(neighbour.normal.dot(normal)) < options.normal_cosine) continue;
+          if (std::abs(normal.dot(neighbour.moments.mean() - center)) > options.merge_distance) continue;
+          neighbour.region = region;
+          members.push_back(id);
+          queue.push(id);
+          moments.add(neighbour.moments);
+          normal = detail::principal_axes(moments.covariance()).vectors.col(0);
+          center = moments.mean();
+        }
+  }
+  return members;
+}
+
+// Point-level completion: points of non-planar voxels touching `plane` (wall bottoms, edges, voxels
+// split by a boundary) join it when they lie within the merge distance of its final plane.
+void absorb_touching_points(const Eigen::Matrix3Xd& points, const VoxelGrid& grid, const std::vector<char>& in_plane,
+                            int region, double merge_distance, Element& plane,
+                            std::unordered_map<std::uint32_t, char>& absorbed) {
+  detail::Moments moments;
+  for (const std::uint32_t index : plane.point_indices) moments.add(points.col(index));
+  const Eigen::Vector3d normal = detail::principal_axes(moments.covariance()).vectors.col(0);
+  const Eigen::Vector3d center = moments.mean();
+  std::vector<int> touched;
+  for (std::size_t id = 0; id < grid.voxels.size(); ++id) {
+    if (!in_plane[id] || grid.voxels[id].region != region) continue;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const int neighbour = grid.find(grid.voxels[id].coordinate + Eigen::Vector3i(dx, dy, dz));
+          if (neighbour >= 0 && !in_plane[neighbour]) touched.push_back(neighbour);
+        }
+  }
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  for (const int id : touched)
+    for (const std::uint32_t index : grid.voxels[id].members) {
+      if (absorbed.count(index) != 0) continue;
+      if (std::abs(normal.dot(points.col(index) - center)) > merge_distance) continue;
+      absorbed[index] = 1;
+      plane.point_indices.push_back(index);
+    }
+}
+
+std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
+                                          const PlaneOptions& options, std::vector<std::uint32_t>& remaining) {
+  VoxelGrid grid = build_voxels(points, candidates, options.voxel_size);
+  std::vector<Voxel>& voxels = grid.voxels;
+  const std::vector<int> planar_order = planar_voxels_by_size(voxels, options);
 
   std::vector<Element> planes;
   std::vector<char> in_plane(voxels.size(), 0);
@@ -200,35 +290,8 @@ std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const 
   for (const int seed : planar_order) {
     if (voxels[seed].region >= 0) continue;
     const int region = region_id++;
-    detail::Moments moments = voxels[seed].moments;
-    Eigen::Vector3d normal = voxels[seed].normal;
-    Eigen::Vector3d center = moments.mean();
-    std::vector<int> members = {seed};
-    voxels[seed].region = region;
-    std::queue<int> queue;
-    queue.push(seed);
-    while (!queue.empty()) {
-      const Voxel& current = voxels[queue.front()];
-      queue.pop();
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            if (dx == 0 && dy == 0 && dz == 0) continue;
-            const Eigen::Vector3i c = current.coordinate + Eigen::Vector3i(dx, dy, dz);
-            const auto it = voxel_of_key.find(detail::voxel_key(c.x(), c.y(), c.z()));
-            if (it == voxel_of_key.end()) continue;
-            Voxel& neighbour = voxels[it->second];
-            if (!neighbour.planar || neighbour.region >= 0) continue;
-            if (std::abs(neighbour.normal.dot(normal)) < options.normal_cosine) continue;
-            if (std::abs(normal.dot(neighbour.moments.mean() - center)) > options.merge_distance) continue;
-            neighbour.region = region;
-            members.push_back(it->second);
-            queue.push(it->second);
-            moments.add(neighbour.moments);
-            normal = detail::principal_axes(moments.covariance()).vectors.col(0);
-            center = moments.mean();
-          }
-    }
+    detail::Moments moments;
+    const std::vector<int> members = grow_plane_region(grid, seed, region, options, moments);
     if (!detail::plane_is_large_enough(moments, members.size(), options)) continue;  // voxels go back to clustering
     Element plane;
     plane.element_class = ElementClass::Plane;
@@ -239,35 +302,9 @@ std::vector<Element> voxel_region_growing(const Eigen::Matrix3Xd& points, const 
     planes.push_back(std::move(plane));
     plane_regions.push_back(region);
   }
-  // Point-level completion: points of non-planar voxels touching a plane (wall bottoms, edges,
-  // voxels split by a boundary) join it when they lie within the merge distance of its final plane.
   std::unordered_map<std::uint32_t, char> absorbed;
-  for (std::size_t p = 0; p < planes.size(); ++p) {
-    detail::Moments moments;
-    for (const std::uint32_t index : planes[p].point_indices) moments.add(points.col(index));
-    const Eigen::Vector3d normal = detail::principal_axes(moments.covariance()).vectors.col(0);
-    const Eigen::Vector3d center = moments.mean();
-    std::vector<int> touched;
-    for (std::size_t id = 0; id < voxels.size(); ++id) {
-      if (!in_plane[id] || voxels[id].region != plane_regions[p]) continue;
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            const Eigen::Vector3i c = voxels[id].coordinate + Eigen::Vector3i(dx, dy, dz);
-            const auto it = voxel_of_key.find(detail::voxel_key(c.x(), c.y(), c.z()));
-            if (it != voxel_of_key.end() && !in_plane[it->second]) touched.push_back(it->second);
-          }
-    }
-    std::sort(touched.begin(), touched.end());
-    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-    for (const int id : touched)
-      for (const std::uint32_t index : voxels[id].members) {
-        if (absorbed.count(index) != 0) continue;
-        if (std::abs(normal.dot(points.col(index) - center)) > options.merge_distance) continue;
-        absorbed[index] = 1;
-        planes[p].point_indices.push_back(index);
-      }
-  }
+  for (std::size_t p = 0; p < planes.size(); ++p)
+    absorb_touching_points(points, grid, in_plane, plane_regions[p], options.merge_distance, planes[p], absorbed);
   remaining.clear();
   for (std::size_t id = 0; id < voxels.size(); ++id)
     if (!in_plane[id])
