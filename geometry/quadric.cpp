@@ -178,6 +178,39 @@ std::string vector_text(const Eigen::Vector3d& v) {
 }
 
 // Closest point to y on {p : sum_i A_i p_i^2 = c} for diagonal A (ellipse, ellipsoid, elliptic cone).
+// The candidate nearest to `y` among those on the surface sum(A_i p_i^2) = level (relative residual
+// <= 1e-6, rejecting ill-conditioned ones); the one with the smallest residual when none qualifies.
+template <int N>
+Eigen::Matrix<double, N, 1> nearest_on_surface(const Eigen::Matrix<double, N, 1>& coefficients, double level,
+                                               const Eigen::Matrix<double, N, 1>& y,
+                                               const std::vector<Eigen::Matrix<double, N, 1>>& candidates) {
+  using Vector = Eigen::Matrix<double, N, 1>;
+  Vector best = y;
+  double best_distance = kInfinity;
+  double best_residual = kInfinity;
+  Vector fallback = y;
+  for (const Vector& p : candidates) {
+    double value = -level;
+    double size = std::abs(level);
+    for (int i = 0; i < N; ++i) {
+      value += coefficients[i] * p[i] * p[i];
+      size += std::abs(coefficients[i]) * p[i] * p[i];
+    }
+    const double residual = size > 0.0 ? std::abs(value) / size : 0.0;
+    if (residual < best_residual) {
+      best_residual = residual;
+      fallback = p;
+    }
+    if (residual > 1e-6) continue;
+    const double distance = (p - y).norm();
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = p;
+    }
+  }
+  return std::isinf(best_distance) ? fallback : best;
+}
+
 // Lagrange: p = (I + mu A)^-1 y with F(mu) = sum A_i y_i^2 / (1 + mu A_i)^2 - c = 0 on the interval
 // where I + mu A > 0. F is strictly decreasing there, so the root is found by bisection (Eberly's
 // robust scheme generalised to indefinite A), and by weak duality it is the global minimum. When y
@@ -273,31 +306,7 @@ Eigen::Matrix<double, N, 1> closest_on_central_quadric(const Eigen::Matrix<doubl
   if (!lower_pole_active) add_boundary(lower, at_lower, largest_positive);
   if (largest_negative > 0.0 && !upper_pole_active) add_boundary(upper, at_upper, -largest_negative);
   if (level == 0.0) candidates.push_back(Vector::Zero());
-  // Pick the nearest candidate among those on the surface (rejecting ill-conditioned ones).
-  Vector best = y;
-  double best_distance = kInfinity;
-  double best_residual = kInfinity;
-  Vector fallback = y;
-  for (const Vector& p : candidates) {
-    double value = -level;
-    double size = std::abs(level);
-    for (int i = 0; i < N; ++i) {
-      value += coefficients[i] * p[i] * p[i];
-      size += std::abs(coefficients[i]) * p[i] * p[i];
-    }
-    const double residual = size > 0.0 ? std::abs(value) / size : 0.0;
-    if (residual < best_residual) {
-      best_residual = residual;
-      fallback = p;
-    }
-    if (residual > 1e-6) continue;
-    const double distance = (p - y).norm();
-    if (distance < best_distance) {
-      best_distance = distance;
-      best = p;
-    }
-  }
-  return std::isinf(best_distance) ? fallback : best;
+  return nearest_on_surface(coefficients, level, y, candidates);
 }
 
 // Closest point on the circular double cone rho = tan(alpha) |z| in the axial half-plane (closed form).
