@@ -219,30 +219,22 @@ std::string primitives_json(const Scene& scene, int record_samples) {
   return document.dump(1) + "\n";
 }
 
-std::vector<std::string> write_synthetic_folder(const std::string& directory, const SyntheticRun& run,
-                                                const SyntheticOutputOptions& options) {
-  if (options.cloud_format != CloudFormat::Ply && options.cloud_format != CloudFormat::Pcd)
-    throw Error("--format: synthetic clouds are written as ply or pcd, not " + cloud_format_name(options.cloud_format));
-  std::error_code error;
-  std::filesystem::create_directories(directory, error);
-  if (error || !std::filesystem::is_directory(directory))
-    throw file_error(directory, "cannot create the output folder: " + error.message());
-  const std::filesystem::path root(directory);
-  const std::string extension = options.cloud_format == CloudFormat::Ply ? ".ply" : ".pcd";
+namespace {
 
+// The files of a synthetic folder as scene.json lists them, and their paths in writing order.
+struct FileIndex {
   ordered_json files = ordered_json::array();
   std::vector<std::string> written;
-  const auto add_file = [&](const std::string& path, const std::string& kind, const std::string& description) {
+
+  void add(const std::string& path, const std::string& kind, const std::string& description) {
     files.push_back({{"path", path}, {"kind", kind}, {"description", description}});
     written.push_back(path);
-  };
+  }
+};
 
-  // Ground truth primitives.
-  write_text((root / "primitives.json").string(), primitives_json(run.scene, options.record_samples));
-  add_file("primitives.json", "ground_truth_primitives",
-           "every bounded true surface: type, scale, pose, extent, label, quadric (10) and 21-number record");
-
-  // Scans and poses.
+// Every scan (cloud in its sensor frame) and its sensor pose; returns scene.json's "scans".
+ordered_json write_scans(const std::filesystem::path& root, const SyntheticRun& run, const SyntheticOutputOptions& options,
+                         const std::string& extension, FileIndex& index) {
   ordered_json scans = ordered_json::array();
   CloudWriteOptions cloud_options;
   cloud_options.format = options.cloud_format;
@@ -253,9 +245,9 @@ std::vector<std::string> write_synthetic_folder(const std::string& directory, co
     const std::string pose_path = "pose_" + three_digits(i) + ".txt";
     write_point_cloud((root / cloud_path).string(), scan.cloud, cloud_options);
     write_pose_matrix((root / pose_path).string(), scan.sensor_pose);
-    add_file(cloud_path, "point_cloud",
-             "scan " + std::to_string(i) + " in its sensor frame; label = semantic label, primitive_id = true primitive");
-    add_file(pose_path, "sensor_pose", "sensor -> world pose of scan " + std::to_string(i) + ", 4x4 row-major");
+    index.add(cloud_path, "point_cloud",
+              "scan " + std::to_string(i) + " in its sensor frame; label = semantic label, primitive_id = true primitive");
+    index.add(pose_path, "sensor_pose", "sensor -> world pose of scan " + std::to_string(i) + ", 4x4 row-major");
     std::size_t primitives_seen = 0;
     for (std::size_t count : scan.points_per_primitive) primitives_seen += count > 0 ? 1 : 0;
     scans.push_back({{"index", i},
@@ -269,20 +261,24 @@ std::vector<std::string> write_synthetic_folder(const std::string& directory, co
                      {"dropped", scan.dropped},
                      {"primitives_seen", primitives_seen}});
   }
+  return scans;
+}
 
-  // Ground-truth relative transforms of every pair: target = lower index, source = higher index.
+// Ground-truth relative transforms of every pair (target = lower index, source = higher index) and
+// pairs.tsv; returns scene.json's "pairs".
+ordered_json write_pairs(const std::filesystem::path& root, const SyntheticRun& run, const std::string& extension,
+                         FileIndex& index) {
   ordered_json pairs = ordered_json::array();
   std::ostringstream tsv;
   tsv << "id\tsource\ttarget\tgt\tgt_quality\tsensor\tkind\tt_m\trot_deg\n";
   for (std::size_t target = 0; target < run.scans.size(); ++target) {
     for (std::size_t source = target + 1; source < run.scans.size(); ++source) {
-      const Eigen::Isometry3d transform =
-          relative_transform(run.scans[target].sensor_pose, run.scans[source].sensor_pose);
+      const Eigen::Isometry3d transform = relative_transform(run.scans[target].sensor_pose, run.scans[source].sensor_pose);
       const std::string path = "T_" + three_digits(target) + "_from_" + three_digits(source) + ".txt";
       write_pose_matrix((root / path).string(), transform);
-      add_file(path, "ground_truth_transform",
-               "maps points of scan " + std::to_string(source) + " (source) into the frame of scan " +
-                   std::to_string(target) + " (target): p_target = R p_source + t");
+      index.add(path, "ground_truth_transform",
+                "maps points of scan " + std::to_string(source) + " (source) into the frame of scan " +
+                    std::to_string(target) + " (target): p_target = R p_source + t");
       const double translation = transform.translation().norm();
       const double cosine = std::clamp((transform.linear().trace() - 1.0) / 2.0, -1.0, 1.0);
       const double rotation_deg = std::acos(cosine) * 180.0 / kPi;
@@ -299,10 +295,12 @@ std::vector<std::string> write_synthetic_folder(const std::string& directory, co
     }
   }
   write_text((root / "pairs.tsv").string(), tsv.str());
-  add_file("pairs.tsv", "pair_list",
-           "every pair in the shared data folder's pairs.tsv format (paths relative to this folder)");
+  index.add("pairs.tsv", "pair_list", "every pair in the shared data folder's pairs.tsv format (paths relative to this folder)");
+  return pairs;
+}
 
-  // Per-primitive point counts.
+// Returned points per primitive (rows) and scan (columns) as point_counts.csv.
+void write_point_counts(const std::filesystem::path& root, const SyntheticRun& run, FileIndex& index) {
   std::ostringstream counts;
   counts << "primitive_id,name,label,model_type";
   for (std::size_t i = 0; i < run.scans.size(); ++i) counts << ",scan_" << three_digits(i);
@@ -314,9 +312,11 @@ std::vector<std::string> write_synthetic_folder(const std::string& directory, co
     counts << '\n';
   }
   write_text((root / "point_counts.csv").string(), counts.str());
-  add_file("point_counts.csv", "point_counts", "returned points per primitive (rows) and scan (columns)");
+  index.add("point_counts.csv", "point_counts", "returned points per primitive (rows) and scan (columns)");
+}
 
-  // scene.json last: it describes everything above.
+// scene.json's description of the run: scene, seed, sensor, frames, primitive and label tables.
+ordered_json scene_description(const SyntheticRun& run) {
   ordered_json sensor;
   sensor["name"] = run.sensor.name;
   sensor["description"] = run.sensor.description;
@@ -345,12 +345,38 @@ std::vector<std::string> write_synthetic_folder(const std::string& directory, co
   scene["primitive_count"] = run.scene.primitives.size();
   scene["model_type_counts"] = type_counts;
   scene["labels"] = labels;
-  add_file("scene.json", "index", "this file: what every file is");
-  scene["files"] = files;
+  return scene;
+}
+
+}  // namespace
+
+std::vector<std::string> write_synthetic_folder(const std::string& directory, const SyntheticRun& run,
+                                                const SyntheticOutputOptions& options) {
+  if (options.cloud_format != CloudFormat::Ply && options.cloud_format != CloudFormat::Pcd)
+    throw Error("--format: synthetic clouds are written as ply or pcd, not " + cloud_format_name(options.cloud_format));
+  std::error_code error;
+  std::filesystem::create_directories(directory, error);
+  if (error || !std::filesystem::is_directory(directory))
+    throw file_error(directory, "cannot create the output folder: " + error.message());
+  const std::filesystem::path root(directory);
+  const std::string extension = options.cloud_format == CloudFormat::Ply ? ".ply" : ".pcd";
+
+  FileIndex index;
+  write_text((root / "primitives.json").string(), primitives_json(run.scene, options.record_samples));
+  index.add("primitives.json", "ground_truth_primitives",
+            "every bounded true surface: type, scale, pose, extent, label, quadric (10) and 21-number record");
+  const ordered_json scans = write_scans(root, run, options, extension, index);
+  const ordered_json pairs = write_pairs(root, run, extension, index);
+  write_point_counts(root, run, index);
+
+  // scene.json last: it describes everything above.
+  ordered_json scene = scene_description(run);
+  index.add("scene.json", "index", "this file: what every file is");
+  scene["files"] = index.files;
   scene["scans"] = scans;
   scene["pairs"] = pairs;
   write_text((root / "scene.json").string(), scene.dump(1) + "\n");
-  return written;
+  return index.written;
 }
 
 }  // namespace quadrix
