@@ -354,11 +354,11 @@ std::string refiner_configuration_name(const RefinerConfiguration& configuration
   return configuration.algorithm.empty() ? configuration.backend : configuration.backend + "/" + configuration.algorithm;
 }
 
-RefinerStudyResult run_refiner_study(const RefinerStudyOptions& options, const RefinerStudyProgress& progress) {
-  const auto start_time = std::chrono::steady_clock::now();
-  RefinerStudyResult result;
+namespace {
+
+// Throws quadrix::Error naming the option when `options` cannot run.
+void validate_refiner_study_options(const RefinerStudyOptions& options) {
   if (options.losses.empty()) throw Error("refiner study: at least one robust loss is needed");
-  result.configurations = refiner_study_configurations(options.backends, options.losses);
   const std::vector<std::string> known_scenes = scene_names();
   for (const std::string& scene : options.scenes)
     if (std::find(known_scenes.begin(), known_scenes.end(), scene) == known_scenes.end())
@@ -376,32 +376,86 @@ RefinerStudyResult run_refiner_study(const RefinerStudyOptions& options, const R
     throw Error("refiner study: perturbation ranges must satisfy 0 <= min <= max (rotation below 180 degrees)");
   if (!(options.loss_scale > 0.0)) throw Error("refiner study: loss_scale must be > 0");
   if (options.max_synthetic_elements < 3) throw Error("refiner study: max_synthetic_elements must be >= 3");
+}
 
+// Every problem of the study: the synthetic scenes' trials, then the shared KITTI loop closures
+// (exact ground truth) when options.real_data and pairs.tsv is there (a note says when it is not).
+std::vector<Problem> refiner_study_problems(const RefinerStudyOptions& options, std::vector<std::string>& notes) {
   std::vector<Problem> problems;
   for (const std::string& scene : options.scenes) {
     const SceneTruth truth = scene_truth(scene);
     for (int trial = 0; trial < options.trials; ++trial)
       for (Problem& problem : synthetic_problems(scene, truth, trial, options)) problems.push_back(std::move(problem));
   }
-  if (options.real_data) {
-    const std::filesystem::path table = std::filesystem::path(options.data_root) / "pairs.tsv";
-    if (!std::filesystem::exists(table)) {
-      result.notes.push_back("real pairs skipped: " + table.string() + " is absent");
-    } else {
-      const RegistrationOptions registration = registration_preset(options.real_preset);
-      std::map<std::string, SceneModel> models;
-      std::size_t used = 0;
-      const std::vector<PairRow> rows = read_pairs_table(table.string());
-      for (std::size_t index = 0; index < rows.size(); ++index) {
-        const PairRow& pair = rows[index];
-        if (pair.kind != "loop_closure" || pair.quality != "exact" || pair.id.rfind("kitti", 0) != 0) continue;
-        if (options.max_real_pairs > 0 && used >= options.max_real_pairs) break;
-        ++used;
-        for (Problem& problem : real_problems(pair, index, registration, models, options, result.notes))
-          problems.push_back(std::move(problem));
-      }
-    }
+  if (!options.real_data) return problems;
+  const std::filesystem::path table = std::filesystem::path(options.data_root) / "pairs.tsv";
+  if (!std::filesystem::exists(table)) {
+    notes.push_back("real pairs skipped: " + table.string() + " is absent");
+    return problems;
   }
+  const RegistrationOptions registration = registration_preset(options.real_preset);
+  std::map<std::string, SceneModel> models;
+  std::size_t used = 0;
+  const std::vector<PairRow> rows = read_pairs_table(table.string());
+  for (std::size_t index = 0; index < rows.size(); ++index) {
+    const PairRow& pair = rows[index];
+    if (pair.kind != "loop_closure" || pair.quality != "exact" || pair.id.rfind("kitti", 0) != 0) continue;
+    if (options.max_real_pairs > 0 && used >= options.max_real_pairs) break;
+    ++used;
+    for (Problem& problem : real_problems(pair, index, registration, models, options, notes)) problems.push_back(std::move(problem));
+  }
+  return problems;
+}
+
+// One row: `configuration` refined from start `s` of `problem`, judged against the truth (exact
+// problems) or against `reference`, the same configuration started at the ground truth.
+RefinerStudyRow refine_from_start(const Problem& problem, std::size_t s, const RefinerConfiguration& configuration,
+                                  Refiner& refiner, const RefinerOptions& refiner_options,
+                                  const RefinementResult& reference, const RefinerStudyOptions& options) {
+  const auto [reference_rte, reference_rre] = pose_gap(reference.transform, problem.truth);
+  const double cpu_before = thread_cpu_ms();
+  const RefinementResult refined = refiner.refine(problem.factors, problem.starts[s], refiner_options);
+  const double cpu_after = thread_cpu_ms();
+  RefinerStudyRow row;
+  row.source = problem.source;
+  row.correspondence_set = problem.correspondence_set;
+  row.backend = configuration.backend;
+  row.algorithm = refined.algorithm;
+  row.loss = robust_loss_name(configuration.loss);
+  row.noise = problem.noise;
+  row.outlier_fraction = problem.outlier_fraction;
+  row.trial = problem.first_trial + static_cast<int>(s);
+  std::tie(row.start_translation, row.start_rotation_degrees) = pose_gap(problem.starts[s], problem.truth);
+  row.correspondences = problem.correspondences;
+  row.wrong_correspondences = problem.wrong_correspondences;
+  row.factors = problem.factors.size();
+  row.status = refinement_status_name(refined.status);
+  std::tie(row.rte, row.rre_degrees) = pose_gap(refined.transform, problem.truth);
+  row.criterion = problem.exact ? "truth" : "reference";
+  row.reference_rte = reference_rte;
+  row.reference_rre_degrees = reference_rre;
+  std::tie(row.gap_translation, row.gap_rotation_degrees) =
+      problem.exact ? std::make_pair(row.rte, row.rre_degrees) : pose_gap(refined.transform, reference.transform);
+  row.converged = refined.status != RefinementStatus::Failed && refined.status != RefinementStatus::Degenerate &&
+                  row.gap_translation < options.converged_translation &&
+                  row.gap_rotation_degrees < options.converged_rotation_degrees;
+  row.iterations = refined.iterations;
+  row.evaluations = refined.evaluations;
+  row.initial_cost = refined.initial_cost;
+  row.final_cost = refined.final_cost;
+  row.time_ms = 1000.0 * refined.seconds;
+  row.cpu_ms = cpu_after - cpu_before;
+  return row;
+}
+
+}  // namespace
+
+RefinerStudyResult run_refiner_study(const RefinerStudyOptions& options, const RefinerStudyProgress& progress) {
+  const auto start_time = std::chrono::steady_clock::now();
+  RefinerStudyResult result;
+  validate_refiner_study_options(options);
+  result.configurations = refiner_study_configurations(options.backends, options.losses);
+  const std::vector<Problem> problems = refiner_study_problems(options, result.notes);
 
   // Fixed row slots: problem-major, then configuration, then start.
   const std::size_t configurations = result.configurations.size();
@@ -423,44 +477,10 @@ RefinerStudyResult run_refiner_study(const RefinerStudyOptions& options, const R
         refiner_options.algorithm = configuration.algorithm;
         refiner_options.loss = configuration.loss;
         refiner_options.loss_scale = options.loss_scale;
-        // The reference: the same configuration started at the ground truth.
         const RefinementResult reference = refiner->refine(problem.factors, problem.truth, refiner_options);
-        const auto [reference_rte, reference_rre] = pose_gap(reference.transform, problem.truth);
-        for (std::size_t s = 0; s < problem.starts.size(); ++s) {
-          const double cpu_before = thread_cpu_ms();
-          const RefinementResult refined = refiner->refine(problem.factors, problem.starts[s], refiner_options);
-          const double cpu_after = thread_cpu_ms();
-          RefinerStudyRow row;
-          row.source = problem.source;
-          row.correspondence_set = problem.correspondence_set;
-          row.backend = configuration.backend;
-          row.algorithm = refined.algorithm;
-          row.loss = robust_loss_name(configuration.loss);
-          row.noise = problem.noise;
-          row.outlier_fraction = problem.outlier_fraction;
-          row.trial = problem.first_trial + static_cast<int>(s);
-          std::tie(row.start_translation, row.start_rotation_degrees) = pose_gap(problem.starts[s], problem.truth);
-          row.correspondences = problem.correspondences;
-          row.wrong_correspondences = problem.wrong_correspondences;
-          row.factors = problem.factors.size();
-          row.status = refinement_status_name(refined.status);
-          std::tie(row.rte, row.rre_degrees) = pose_gap(refined.transform, problem.truth);
-          row.criterion = problem.exact ? "truth" : "reference";
-          row.reference_rte = reference_rte;
-          row.reference_rre_degrees = reference_rre;
-          std::tie(row.gap_translation, row.gap_rotation_degrees) =
-              problem.exact ? std::make_pair(row.rte, row.rre_degrees) : pose_gap(refined.transform, reference.transform);
-          row.converged = refined.status != RefinementStatus::Failed && refined.status != RefinementStatus::Degenerate &&
-                          row.gap_translation < options.converged_translation &&
-                          row.gap_rotation_degrees < options.converged_rotation_degrees;
-          row.iterations = refined.iterations;
-          row.evaluations = refined.evaluations;
-          row.initial_cost = refined.initial_cost;
-          row.final_cost = refined.final_cost;
-          row.time_ms = 1000.0 * refined.seconds;
-          row.cpu_ms = cpu_after - cpu_before;
-          result.rows[offsets[task / configurations] + c * problem.starts.size() + s] = std::move(row);
-        }
+        for (std::size_t s = 0; s < problem.starts.size(); ++s)
+          result.rows[offsets[task / configurations] + c * problem.starts.size() + s] =
+              refine_from_start(problem, s, configuration, *refiner, refiner_options, reference, options);
         const std::size_t now = done.fetch_add(problem.starts.size()) + problem.starts.size();
         if (progress) {
           std::lock_guard<std::mutex> lock(progress_mutex);
