@@ -1,8 +1,10 @@
 // `quadrix model INPUT... [--poses P,...] --out model.json [--binary model.qsm] [--mesh model.ply]
-// [--elements elements.ply] [--picture model.png] [--preset P] [--labels FILE] [--fitter NAME]`:
+// [--elements elements.ply] [--picture model.png] [--preset P] [--labels FILE] [--fitter NAME] [--no-page]`:
 // the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose)
-// (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling").
+// (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling"). Beside model.json it writes the
+// interactive page model.html (quadrix view) unless --no-page.
 #include "experiments/command_line/command_registry.h"
+#include "experiments/reports/interactive_page.h"
 #include "experiments/reports/model_picture.h"
 #include "estimation/registration_config.h"
 #include "fitting/scene_modelling.h"
@@ -37,6 +39,7 @@ struct ModelCommandOptions {
   double view_azimuth_deg = -60.0;    ///< picture camera azimuth, degrees
   double view_elevation_deg = 30.0;   ///< picture camera elevation, degrees
   double view_zoom = 1.0;             ///< picture zoom (> 1: closer)
+  bool no_page = false;               ///< skip the interactive page beside --out
 };
 
 // A distinct colour per element (golden-ratio hue walk, full saturation).
@@ -211,6 +214,35 @@ void run(const ModelCommandOptions& options) {
     }
   }
   if (!options.elements.empty()) write_point_cloud(options.elements, element_cloud(result, cloud));
+  // The interactive page beside the JSON (model.json -> model.html): the same extents as --mesh.
+  std::string page_path;
+  if (!options.no_page) {
+    const std::filesystem::path json_path(options.out);
+    page_path = json_path.extension() == ".json" ? std::filesystem::path(json_path).replace_extension(".html").string()
+                                                 : options.out + ".html";  // never the JSON's own path
+    ModelPageInput page;
+    page.title = std::filesystem::path(options.inputs.front()).filename().string() +
+                 (options.inputs.size() > 1 ? " + " + std::to_string(options.inputs.size() - 1) + " more" : "");
+    page.status = modelling_status_name(result.status);
+    page.message = result.message;
+    page.facts = {{"preset", options.preset}, {"fitter", modelling.fitter}, {"points", std::to_string(cloud.size())},
+                  {"elements", std::to_string(result.extraction.elements.size())},
+                  {"records", std::to_string(model.size()) + " (" + std::to_string(model.augmented_count()) + " augmented points)"}};
+    page.quadrics = page_quadrics(model);
+    for (std::size_t i = 0; i < page.quadrics.size(); ++i) {
+      const Element& element = result.extraction.elements[static_cast<std::size_t>(result.record_elements[i])];
+      page.quadrics[i].extent = local_extent_of_points(model.records[i].quadric().decompose(), points, element.point_indices);
+    }
+    page.points = subsample_points(cloud, page.point_budget);
+    page.points_total = cloud.size();
+    // The model is written: a page that cannot be built (libjs-three missing) is a warning only.
+    try {
+      write_page(page_path, model_page_html(page));
+    } catch (const Error& error) {
+      std::fprintf(stderr, "quadrix: warning: %s not written: %s (--no-page skips it)\n", page_path.c_str(), error.what());
+      page_path.clear();
+    }
+  }
 
   std::printf("quadrix model %s%s  (%zu points, %zu in range, preset %s, fitter %s)\n", options.inputs.front().c_str(),
               options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
@@ -243,7 +275,9 @@ void run(const ModelCommandOptions& options) {
     std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f m", model.ground_normal.x(), model.ground_normal.y(),
                 model.ground_normal.z(), model.ground_offset);
   std::printf("\nwrote %s", options.out.c_str());
-  for (const std::string* path : {&options.binary, &options.mesh, &options.elements, &options.picture})
+  const std::initializer_list<const std::string*> written = {&options.binary, &options.mesh, &options.elements, &options.picture,
+                                                             &page_path};
+  for (const std::string* path : written)
     if (!path->empty()) std::printf(", %s", path->c_str());
   std::printf("\n");
 }
@@ -282,6 +316,7 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   command->add_option("--view-elevation", options->view_elevation_deg, "Picture camera elevation, degrees (-89..89)")
       ->capture_default_str();
   command->add_option("--view-zoom", options->view_zoom, "Picture zoom (> 1 moves the camera closer)")->capture_default_str();
+  command->add_flag("--no-page", options->no_page, "Do not write the interactive page (--out with .html) beside the JSON");
   command->callback([options] { run(*options); });
 });
 

@@ -2,11 +2,13 @@
 // [--source-preset P --target-preset P] [--labels-source F --labels-target F] [--gt FILE] [--out DIR]`:
 // global registration of two clouds with quadrics (paper Fig. overview, Algorithm 1). Prints the 4x4
 // transform mapping SOURCE points into the TARGET frame and a one-line summary; with --gt also RTE,
-// RRE and success (2 m / 5 deg); with --out writes report.json, merged.ply and bev.png.
+// RRE and success (2 m / 5 deg); with --out writes report.json, merged.ply, bev.png, both models
+// (source_model.json, target_model.json) and the interactive page view.html (unless --no-page).
 // The exit status is 0 whenever a registration ran (its status says ok / ambiguous / degenerate /
 // failed); 2 on bad input (unreadable file, unknown preset or config key).
 #include "experiments/command_line/command_registry.h"
 #include "estimation/registration_config.h"
+#include "experiments/reports/interactive_page.h"
 #include "experiments/reports/registration_report.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
@@ -34,6 +36,7 @@ struct RegisterCommandOptions {
   std::string ground_truth;    ///< 4x4 T_gt (source -> target) for RTE/RRE
   std::string out;             ///< output folder
   std::string refiner;         ///< refiner override (ceres | nlopt)
+  bool no_page = false;        ///< skip view.html in the output folder
 };
 
 void run(const RegisterCommandOptions& options) {
@@ -108,7 +111,28 @@ void run(const RegisterCommandOptions& options) {
     write_registration_report((folder / "report.json").string(), result, context);
     write_point_cloud((folder / "merged.ply").string(), merge_aligned_clouds(source, target, result.transform));
     write_birds_eye_png((folder / "bev.png").string(), source, target, result.transform);
-    std::printf("wrote %s/{report.json, merged.ply, bev.png}\n", options.out.c_str());
+    // The models, so `quadrix view DIR` can draw the clique's correspondences between record centres.
+    write_scene_model_json((folder / "source_model.json").string(), result.source_model);
+    write_scene_model_json((folder / "target_model.json").string(), result.target_model);
+    std::string page;
+    if (!options.no_page) {
+      RegistrationPageInput page_input;
+      page_input.report_json = registration_report_json(result, context);
+      page_input.source_model = result.source_model;
+      page_input.target_model = result.target_model;
+      page_input.source = source;
+      page_input.target = target;
+      // The registration's own outputs are written: a page that cannot be built (libjs-three
+      // missing) is a warning, not a failed run.
+      try {
+        write_page((folder / "view.html").string(), registration_page_html(page_input));
+        page = ", view.html";
+      } catch (const Error& error) {
+        std::fprintf(stderr, "quadrix: warning: view.html not written: %s (--no-page skips it)\n", error.what());
+      }
+    }
+    std::printf("wrote %s/{report.json, merged.ply, bev.png, source_model.json, target_model.json%s}\n", options.out.c_str(),
+                page.c_str());
   }
 }
 
@@ -130,7 +154,9 @@ const CommandRegistration registration(60, [](CLI::App& app) {
   command->add_option("--labels-target", options->labels_target, "SemanticKITTI .label file of the target");
   command->add_option("--gt", options->ground_truth, "Ground-truth 4x4 (maps source into target): print RTE/RRE/success");
   command->add_option("--refiner", options->refiner, "Refiner backend override: ceres | nlopt");
-  command->add_option("--out", options->out, "Folder for report.json, merged.ply and bev.png");
+  command->add_option("--out", options->out,
+                      "Folder for report.json, merged.ply, bev.png, source_model.json, target_model.json and view.html");
+  command->add_flag("--no-page", options->no_page, "With --out: do not write the interactive page view.html");
   command->callback([options] { run(*options); });
 });
 

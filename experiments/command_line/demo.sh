@@ -31,4 +31,4 @@ else
 fi
 "$quadrix" register "$source" "$target" --gt "$gt" --out "$out/register"
 print_truth "$gt"
-echo "pictures: $out/register/bev.png (bird's-eye view), $out/register/merged.ply (target grey, source orange)"
+echo "pictures: $out/register/bev.png (bird's-eye view), $out/register/merged.ply (target grey, source orange), $out/register/view.html (interactive 3-D page)"

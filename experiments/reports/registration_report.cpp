@@ -95,6 +95,9 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
   nlohmann::json candidates = nlohmann::json::array();
   for (std::size_t i = 0; i < result.candidates.size(); ++i) {
     const RegistrationCandidate& candidate = result.candidates[i];
+    // I*_k as [source record, target record] pairs: what the interactive page draws as lines.
+    nlohmann::json clique = nlohmann::json::array();
+    for (const RecordCorrespondence& pair : candidate.clique) clique.push_back({pair.source_index, pair.target_index});
     const bool selected = (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) &&
                           i == result.best_candidate;
     candidates.push_back({{"level", candidate.level},
@@ -111,7 +114,8 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                           {"refinement_filtered_count", candidate.filtered_count},
                           {"refinement_cost", number_or_null(candidate.refinement_cost)},
                           {"transform", matrix_json(candidate.transform)},
-                          {"note", candidate.note}});
+                          {"note", candidate.note},
+                          {"clique", clique}});
   }
   report["candidates"] = candidates;
   report["best_to_second_ratio"] = number_or_null(result.best_to_second_ratio);

@@ -33,7 +33,8 @@ struct RegistrationReportContext {
 /// result: modelling_source, modelling_target, correspondences, graphs, cliques, estimation,
 /// selection, "registration" = register_clouds' own total), "counts", "candidates" (one object per
 /// level: level, threshold_m, clique_size, refinement_status, valid, selected, score, pair_count,
-/// filtered_count, term_count, factor_count, transform, note), "best_to_second_ratio", "input"
+/// filtered_count, term_count, factor_count, transform, note, clique: [[source record, target record], ...] of I*_k),
+/// "best_to_second_ratio", "input"
 /// (paths and presets), with a ground truth "ground_truth" {transform, rte_m, rre_deg, success}, and
 /// with a measured overlap "overlap" {distance_m, transformed, identity, sampled_points}; when the
 /// dense search ran, "dense_search" {weakest_direction, weakest_share, best, rival, margin,

@@ -1,0 +1,66 @@
+// `quadrix view INPUT --out page.html [--points N]`: the interactive 3-D page (DESIGN.md §7) of a
+// `quadrix register --out` folder (registration page), a `quadrix model` JSON file or a
+// `quadrix synth` folder (model pages). One self-contained HTML file: three.js from Debian's
+// libjs-three and the data are inlined, so it opens from disk without a network.
+#include "experiments/command_line/command_registry.h"
+#include "experiments/reports/interactive_page.h"
+#include "geometry/error.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace quadrix::cli {
+namespace {
+
+struct ViewCommandOptions {
+  std::string input;                 ///< register folder, model JSON or synth folder
+  std::string out;                   ///< HTML page to write
+  std::size_t point_budget = 400000; ///< most points written into the page
+};
+
+void run(const ViewCommandOptions& options) {
+  const std::filesystem::path input(options.input);
+  std::string html;
+  std::string kind;
+  if (std::filesystem::is_directory(input) && std::filesystem::exists(input / "report.json")) {
+    RegistrationPageInput page = read_registration_folder(options.input);
+    page.point_budget = options.point_budget;
+    html = registration_page_html(page);
+    kind = "registration";
+  } else if (std::filesystem::is_directory(input) && std::filesystem::exists(input / "scene.json")) {
+    ModelPageInput page = read_synthetic_folder_page(options.input);
+    page.point_budget = options.point_budget;
+    html = model_page_html(page);
+    kind = "synthetic scene";
+  } else if (std::filesystem::is_regular_file(input) && input.extension() == ".json") {
+    ModelPageInput page = read_model_json_page(options.input);
+    page.point_budget = options.point_budget;
+    html = model_page_html(page);
+    kind = "model";
+  } else {
+    throw file_error(options.input,
+                     "expected a `quadrix register --out` folder (report.json), a `quadrix synth` folder (scene.json) "
+                     "or a `quadrix model` JSON file");
+  }
+  write_page(options.out, html);
+  std::printf("wrote %s (%s page, %.1f MB)\n", options.out.c_str(), kind.c_str(), static_cast<double>(html.size()) / 1e6);
+}
+
+const CommandRegistration registration(65, [](CLI::App& app) {
+  auto options = std::make_shared<ViewCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "view", "Write an interactive 3-D page (one self-contained HTML file) of a registration, a model or a synthetic scene");
+  command->add_option("input", options->input,
+                      "A `quadrix register --out` folder, a `quadrix model` JSON file or a `quadrix synth` folder")
+      ->required();
+  command->add_option("--out", options->out, "HTML page to write")->required();
+  command->add_option("--points", options->point_budget, "Most points written into the page (subsampled evenly)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, std::size_t{5000000}));
+  command->callback([options] { run(*options); });
+});
+
+}  // namespace
+}  // namespace quadrix::cli

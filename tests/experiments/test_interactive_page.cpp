@@ -1,0 +1,267 @@
+// The interactive page (`quadrix view`, `quadrix register --out`, `quadrix model`) opened in a real
+// browser: Debian's chromium, headless, from disk with no network. Each page must run without a
+// JavaScript error (the page's own error hook and the console), draw a non-blank canvas (pixel
+// statistics of a screenshot, decoded with stb_image), show the status in the side panel and report
+// the time its first frame was drawn (data-ready-ms, logged). Skips when chromium is not installed.
+#include "experiments/reports/interactive_page.h"
+#include "geometry/error.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_STATIC
+#include <stb/stb_image.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+
+namespace quadrix {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* const kChromium = "/usr/bin/chromium";
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Runs a shell command, its output into `log`; returns the exit status.
+int run(const std::string& command, const fs::path& log) {
+  return std::system((command + " > '" + log.string() + "' 2>&1").c_str());
+}
+
+fs::path fresh_directory(const std::string& name) {
+  const fs::path directory = fs::temp_directory_path() /
+                             ("quadrix_page_" + name + "_" + std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
+  fs::create_directories(directory);
+  return directory;
+}
+
+/// What the browser made of a page.
+struct BrowserView {
+  std::string dom;              ///< the DOM after the scripts ran (--dump-dom)
+  std::string console;          ///< chromium's console lines (INFO:CONSOLE) of both runs
+  double ready_ms = -1.0;       ///< data-ready-ms: performance.now() when the first frame was drawn
+  std::string error;            ///< data-error, empty when none
+  int canvas_colours = 0;       ///< distinct colours in the 3-D view's part of the screenshot
+  double canvas_drawn = 0.0;    ///< fraction of that part that is not the white background
+};
+
+std::string chromium_command(const fs::path& profile) {
+  return std::string(kChromium) +
+         " --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader --disable-quic --no-first-run"
+         " --disable-background-networking --disable-component-update --disable-sync --enable-logging=stderr --v=0"
+         " --window-size=1280,800 --user-data-dir='" + profile.string() + "'";
+}
+
+// Opens `page` (with an optional "#..." fragment) twice in fresh profiles: once dumping the DOM, once
+// taking a 1280x800 screenshot.
+BrowserView open_in_browser(const fs::path& page, const std::string& fragment = "") {
+  const fs::path work = fresh_directory("browser");
+  const std::string url = "'file://" + fs::absolute(page).string() + fragment + "'";
+  BrowserView view;
+  const fs::path dom_path = work / "dom.html", dom_log = work / "dom.log";
+  EXPECT_EQ(std::system(("timeout 120 " + chromium_command(work / "profile_dom") + " --dump-dom " + url + " > '" +
+                         dom_path.string() + "' 2> '" + dom_log.string() + "'").c_str()),
+            0)
+      << read_text(dom_log);
+  view.dom = read_text(dom_path);
+  const fs::path shot = work / "shot.png", shot_log = work / "shot.log";
+  EXPECT_EQ(run("timeout 120 " + chromium_command(work / "profile_shot") + " --screenshot='" + shot.string() + "' " + url, shot_log), 0)
+      << read_text(shot_log);
+  std::istringstream lines(read_text(dom_log) + read_text(shot_log));
+  for (std::string line; std::getline(lines, line);)
+    if (line.find(":CONSOLE") != std::string::npos) view.console += line + "\n";
+  std::smatch match;
+  if (std::regex_search(view.dom, match, std::regex("data-ready-ms=\"([0-9.]+)\""))) view.ready_ms = std::stod(match[1]);
+  if (std::regex_search(view.dom, match, std::regex("data-error=\"([^\"]*)\""))) view.error = match[1];
+  int width = 0, height = 0, channels = 0;
+  unsigned char* pixels = stbi_load(shot.string().c_str(), &width, &height, &channels, 3);
+  EXPECT_NE(pixels, nullptr) << shot << ": not a PNG the screenshot should have written";
+  if (pixels != nullptr) {
+    // The 3-D view is the left part of the window (the side panel is 360 px wide on the right).
+    std::set<unsigned> colours;
+    std::size_t drawn = 0, total = 0;
+    for (int y = 40; y < height - 40; ++y)
+      for (int x = 10; x < width - 380; ++x) {
+        const unsigned char* p = pixels + 3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x));
+        colours.insert((unsigned{p[0]} << 16) | (unsigned{p[1]} << 8) | p[2]);
+        drawn += (p[0] < 245 || p[1] < 245 || p[2] < 245) ? 1 : 0;
+        ++total;
+      }
+    view.canvas_colours = static_cast<int>(colours.size());
+    view.canvas_drawn = total ? static_cast<double>(drawn) / static_cast<double>(total) : 0.0;
+    stbi_image_free(pixels);
+  }
+  fs::remove_all(work);
+  return view;
+}
+
+// The checks every page must pass; `status` is what the side panel must show.
+void expect_page_works(const fs::path& page, const std::string& status, const std::string& name) {
+  ASSERT_TRUE(fs::exists(page)) << page;
+  const double megabytes = static_cast<double>(fs::file_size(page)) / 1e6;
+  EXPECT_LT(megabytes, 20.0) << page;
+  const std::string html = read_text(page);
+  for (const char* external : {"<script src", "<link ", "<img ", "<iframe"})
+    EXPECT_EQ(html.find(external), std::string::npos) << page << ": the page must load nothing from outside itself (" << external << ")";
+  const BrowserView view = open_in_browser(page);
+  std::cout << name << ": " << page.filename().string() << " " << megabytes << " MB, first frame at " << view.ready_ms
+            << " ms after opening, canvas " << view.canvas_colours << " colours, " << 100.0 * view.canvas_drawn << "% drawn\n";
+  EXPECT_TRUE(view.error.empty()) << "JavaScript error: " << view.error;
+  EXPECT_EQ(view.console.find("Uncaught"), std::string::npos) << view.console;
+  EXPECT_GE(view.ready_ms, 0.0) << "the page never reported its first frame (data-ready-ms); DOM:\n" << view.dom.substr(0, 2000);
+  EXPECT_NE(view.dom.find("<title>quadrix view ready"), std::string::npos);
+  EXPECT_NE(view.dom.find(">status: " + status + "</div>"), std::string::npos) << "side panel without status " << status;
+  EXPECT_GE(view.canvas_colours, 3) << "blank canvas";
+  EXPECT_GE(view.canvas_drawn, 0.01) << "blank canvas";
+}
+
+class InteractivePage : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (!fs::exists(kChromium)) return;
+    directory_ = fresh_directory("suite");
+    // The demo's synthetic street pair (experiments/command_line/demo.sh), registered with --out.
+    const fs::path street = directory_ / "street";
+    ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " synth street --seed 3 --sensor hdl64 --out '" + street.string() + "'",
+                  directory_ / "synth.log"),
+              0)
+        << read_text(directory_ / "synth.log");
+    std::istringstream pairs(read_text(street / "pairs.tsv"));
+    std::string header, id, source, target, truth;
+    std::getline(pairs, header);
+    pairs >> id >> source >> target >> truth;
+    ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " register '" + (street / source).string() + "' '" + (street / target).string() +
+                      "' --gt '" + (street / truth).string() + "' --out '" + (directory_ / "register").string() + "'",
+                  directory_ / "register.log"),
+              0)
+        << read_text(directory_ / "register.log");
+    scan_ = street / source;
+  }
+  static void TearDownTestSuite() {
+    if (!directory_.empty()) fs::remove_all(directory_);
+  }
+  void SetUp() override {
+    if (!fs::exists(kChromium)) GTEST_SKIP() << kChromium << " not installed (apt-get install chromium): the page tests need a browser";
+  }
+  static fs::path directory_;
+  static fs::path scan_;
+};
+fs::path InteractivePage::directory_;
+fs::path InteractivePage::scan_;
+
+std::string report_status(const fs::path& folder) {
+  return nlohmann::json::parse(read_text(folder / "report.json")).at("status").get<std::string>();
+}
+
+TEST_F(InteractivePage, RegisterWritesAWorkingPageAndTheCliqueItDraws) {
+  const fs::path folder = directory_ / "register";
+  const nlohmann::json report = nlohmann::json::parse(read_text(folder / "report.json"));
+  // report.json keeps its keys and gains each candidate's clique (record index pairs of the models).
+  ASSERT_FALSE(report.at("candidates").empty());
+  const nlohmann::json& winner = report["candidates"][0];
+  EXPECT_TRUE(winner.contains("transform"));
+  ASSERT_TRUE(winner.contains("clique"));
+  EXPECT_EQ(winner["clique"].size(), winner["clique_size"].get<std::size_t>());
+  ASSERT_TRUE(fs::exists(folder / "source_model.json"));
+  const SceneModel source_model = read_scene_model_json((folder / "source_model.json").string());
+  for (const auto& pair : winner["clique"]) EXPECT_LT(pair[0].get<std::size_t>(), source_model.size());
+  expect_page_works(folder / "view.html", report_status(folder), "register --out view.html");
+}
+
+TEST_F(InteractivePage, ViewOfARegisterFolderDrawsTheCliqueLinesAndAppliesACandidate) {
+  const fs::path folder = directory_ / "register";
+  const fs::path page = directory_ / "registration.html";
+  ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " view '" + folder.string() + "' --out '" + page.string() + "'", directory_ / "view.log"), 0)
+      << read_text(directory_ / "view.log");
+  expect_page_works(page, report_status(folder), "view of a register folder");
+  // "#candidate=1" applies candidate 1 as a click on its row does; the panel says so.
+  const BrowserView view = open_in_browser(page, "#candidate=1");
+  EXPECT_TRUE(view.error.empty()) << view.error;
+  EXPECT_NE(view.dom.find("<span id=\"shown\">candidate 1 (level 1"), std::string::npos) << view.dom.substr(0, 3000);
+}
+
+TEST_F(InteractivePage, ModelPageShowsQuadricsAndTheRecordOfAPickedOne) {
+  const fs::path json = directory_ / "model.json";
+  ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " model '" + scan_.string() + "' --preset vlp64 --out '" + json.string() + "'",
+                directory_ / "model.log"),
+            0)
+      << read_text(directory_ / "model.log");
+  const fs::path page = directory_ / "model.html";
+  expect_page_works(page, "ok", "model page (quadrix model)");
+  const BrowserView view = open_in_browser(page, "#pick=0");
+  EXPECT_TRUE(view.error.empty()) << view.error;
+  EXPECT_NE(view.dom.find("<b>quadric 0</b>"), std::string::npos);
+  EXPECT_NE(view.dom.find("21-number record"), std::string::npos);
+  // The page of the JSON alone (quadrics, no points) works too.
+  const fs::path json_page = directory_ / "model_json.html";
+  ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " view '" + json.string() + "' --out '" + json_page.string() + "'", directory_ / "view.log"), 0)
+      << read_text(directory_ / "view.log");
+  expect_page_works(json_page, "ok", "view of model.json");
+}
+
+TEST_F(InteractivePage, SyntheticFolderPageShowsTheTruth) {
+  const fs::path page = directory_ / "street.html";
+  ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " view '" + (directory_ / "street").string() + "' --out '" + page.string() + "'",
+                directory_ / "view.log"),
+            0)
+      << read_text(directory_ / "view.log");
+  expect_page_works(page, "ground truth", "view of a synth folder");
+}
+
+TEST_F(InteractivePage, TheHarnessSeesAJavaScriptError) {
+  // A page whose data block is broken must fail the checks above: the harness can fail.
+  std::string html = read_text(directory_ / "register" / "view.html");
+  const std::string marker = "id=\"quadrix-data\">";
+  const std::size_t at = html.find(marker);
+  ASSERT_NE(at, std::string::npos);
+  html.insert(at + marker.size(), "{broken");
+  const fs::path page = directory_ / "broken.html";
+  write_page(page.string(), html);
+  const BrowserView view = open_in_browser(page);
+  EXPECT_FALSE(view.error.empty());
+  EXPECT_LT(view.ready_ms, 0.0);
+  EXPECT_NE(view.console.find("Uncaught"), std::string::npos) << view.console;
+}
+
+TEST(InteractivePageInput, ViewRejectsAnInputItCannotShow) {
+  const fs::path directory = fresh_directory("reject");
+  const fs::path log = directory / "view.log";
+  EXPECT_NE(run(std::string(QUADRIX_EXECUTABLE) + " view '" + directory.string() + "' --out '" + (directory / "x.html").string() + "'", log), 0);
+  EXPECT_NE(read_text(log).find("expected a `quadrix register --out` folder"), std::string::npos) << read_text(log);
+  EXPECT_FALSE(fs::exists(directory / "x.html"));
+  fs::remove_all(directory);
+}
+
+TEST(InteractivePageInput, QuadricMeshStaysInsideTheBoxOfItsFullAttributes) {
+  // A vertical cylinder of radius 1 (x^2 + y^2 - 1 = 0) whose points span z in [-2, 2]: the page's
+  // mesh without an extent is cut to a box around t_f: three radii along the axis, 1.2 radii across.
+  PageQuadric quadric;
+  quadric.record.label = static_cast<std::uint32_t>(ElementClass::Cylinder);
+  quadric.record.q << 1, 1, 0, 0, 0, 0, 0, 0, 0, -1;
+  quadric.record.full_scale = Eigen::Vector3d(1.0, 1.0, 2.0);
+  quadric.type = QuadricType::CircularCylinder;
+  const TriangleMesh mesh = page_quadric_mesh(quadric, 24);
+  ASSERT_GT(mesh.triangles.size(), 50u);
+  EXPECT_LE(mesh.vertices.row(2).maxCoeff(), 3.0 + 0.3);
+  EXPECT_GE(mesh.vertices.row(2).minCoeff(), -3.0 - 0.3);
+  EXPECT_GT(mesh.vertices.row(2).maxCoeff(), 2.5);
+  for (Eigen::Index v = 0; v < mesh.vertices.cols(); ++v) EXPECT_NEAR(mesh.vertices.col(v).head<2>().norm(), 1.0, 1e-6);
+}
+
+}  // namespace
+}  // namespace quadrix
