@@ -1,0 +1,160 @@
+// quadrix.register and quadrix.RegistrationResult: `quadrix register` as a function. The result's
+// content is report.json's: it is built by the same registration_report_json (quadrix_reports), so
+// Python and the command line cannot drift apart.
+#include "bindings.h"
+
+#include "estimation/registration_config.h"
+#include "experiments/reports/registration_report.h"
+#include "geometry/io.h"
+
+#include <pybind11/stl.h>
+
+#include <chrono>
+
+namespace quadrix::python {
+
+namespace {
+
+/// What quadrix.register returns.
+struct Registration {
+  RegistrationResult result;  ///< register_clouds' result
+  std::string json;           ///< registration_report_json: report.json's text
+  py::object report;          ///< json.loads(json)
+};
+
+// report[key], or None when the report has no such key.
+py::object report_entry(const Registration& registration, const char* key) {
+  return registration.report.attr("get")(key);
+}
+
+// A Python model of one side of the result.
+std::shared_ptr<Model> side_model(const SceneModel& scene) {
+  auto model = std::make_shared<Model>();
+  model->model = scene;
+  model->status = modelling_status_name(scene.augmented_begin > 0 ? ModellingStatus::Ok : ModellingStatus::Empty);
+  return model;
+}
+
+}  // namespace
+
+void bind_register(py::module_& module) {
+  py::class_<Registration, std::shared_ptr<Registration>>(module, "RegistrationResult", R"doc(
+The outcome of ``register``: the content of ``quadrix register --out``'s report.json (the same
+function builds both), plus the two scene models.
+
+``transform`` maps source points into the target frame: ``p_target = T[:3, :3] @ p + T[:3, 3]``.
+``status`` is ok, ambiguous, degenerate or failed (see the README's table); only use the transform
+as an answer when it is ok.
+)doc")
+      .def_property_readonly("transform", [](const Registration& r) { return matrix_array(r.result.transform); },
+                             "4x4 float64: T* mapping source points into the target frame (identity unless ok/ambiguous).")
+      .def_property_readonly("status", [](const Registration& r) { return registration_status_name(r.result.status); },
+                             "ok, ambiguous, degenerate or failed.")
+      .def_property_readonly("ok", [](const Registration& r) { return r.result.status == RegistrationStatus::Ok; },
+                             "True when the status is ok.")
+      .def_property_readonly("message", [](const Registration& r) { return r.result.message; },
+                             "Why, for any status but ok; a short summary otherwise.")
+      .def_property_readonly("timings_ms", [](const Registration& r) { return report_entry(r, "timings_ms"); },
+                             "report.json's timings_ms: total, load, every stage, and registration (register_clouds' own total), ms.")
+      .def_property_readonly("counts", [](const Registration& r) { return report_entry(r, "counts"); },
+                             "report.json's counts: points, elements, quadrics, augmented points, correspondences, clique sizes.")
+      .def_property_readonly("candidates", [](const Registration& r) { return report_entry(r, "candidates"); },
+                             "report.json's candidates: one dict per clique level (clique size, refinement, score, transform, selected...).")
+      .def_property_readonly("overlap", [](const Registration& r) { return report_entry(r, "overlap"); },
+                             "report.json's overlap {distance_m, transformed, identity, sampled_points}.")
+      .def_property_readonly("dense_search", [](const Registration& r) { return report_entry(r, "dense_search"); },
+                             "report.json's dense_search, or None when the dense search did not run.")
+      .def_property_readonly("ground_truth", [](const Registration& r) { return report_entry(r, "ground_truth"); },
+                             "report.json's ground_truth {transform, rte_m, rre_deg, success} when ground_truth= was given, else None.")
+      .def_property_readonly("best_candidate", [](const Registration& r) { return r.result.best_candidate; },
+                             "Index of the chosen candidate in ``candidates``.")
+      .def_readonly("report", &Registration::report, "The whole report.json content as a dict.")
+      .def_property_readonly("source_model", [](const Registration& r) { return side_model(r.result.source_model); },
+                             "The source's quadrix.Model (R_x) as registered.")
+      .def_property_readonly("target_model", [](const Registration& r) { return side_model(r.result.target_model); },
+                             "The target's quadrix.Model (R_y) as registered.")
+      .def("to_json", [](const Registration& r) { return r.json; }, "report.json's text (pretty-printed JSON).")
+      .def(
+          "save",
+          [](const Registration& r, const py::object& path) {
+            const std::string file = path_from_object(path);
+            require_writable_location(file);
+            write_file_atomically(file, [&](std::ostream& out) { out << r.json; });
+          },
+          py::arg("path"), "Writes report.json's text to ``path`` atomically (what ``quadrix register --out`` writes).")
+      .def("__repr__", [](const Registration& r) {
+        return std::string("<quadrix.RegistrationResult ") + registration_status_name(r.result.status) + ": " +
+               r.result.message + ">";
+      });
+
+  module.def(
+      "register",
+      [](const py::object& source_object, const py::object& target_object, const std::string& preset,
+         const py::object& config, const py::object& refiner, const py::object& source_preset,
+         const py::object& target_preset, const py::object& source_labels, const py::object& target_labels,
+         const py::object& ground_truth) {
+        using Clock = std::chrono::steady_clock;
+        std::optional<Eigen::Isometry3d> truth;
+        if (!ground_truth.is_none()) truth = pose_from_object(ground_truth, "ground_truth");
+        const Clock::time_point start = Clock::now();
+        std::shared_ptr<Cloud> source_holder, target_holder;
+        RegistrationReportContext context;
+        const PointCloud& source = cloud_from_object(source_object, "source", source_holder, &context.source_path);
+        const PointCloud& target = cloud_from_object(target_object, "target", target_holder, &context.target_path);
+        const std::vector<std::uint32_t> source_point_labels = labels_from_object(source_labels, source.size(), "source_labels");
+        const std::vector<std::uint32_t> target_point_labels = labels_from_object(target_labels, target.size(), "target_labels");
+        context.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+
+        std::string notes;
+        const RegistrationOptions options = registration_options_from(
+            source_preset.is_none() ? preset : source_preset.cast<std::string>(), source,
+            target_preset.is_none() ? preset : target_preset.cast<std::string>(), target, config, refiner, &notes);
+        auto registration = std::make_shared<Registration>();
+        {
+          py::gil_scoped_release release;
+          registration->result = register_clouds(source, target, options, source_point_labels, target_point_labels);
+          context.total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+          context.source_preset = options.source_extraction.preset;
+          context.target_preset = options.target_extraction.preset;
+          context.preset_notes = notes;
+          context.ground_truth = truth;
+          context.overlap = registration->result.overlap;
+          registration->json = registration_report_json(registration->result, context);
+        }
+        registration->report = json_loads(registration->json);
+        return registration;
+      },
+      py::arg("source"), py::arg("target"), py::arg("preset") = "auto", py::arg("config") = py::none(),
+      py::arg("refiner") = py::none(), py::kw_only(), py::arg("source_preset") = py::none(),
+      py::arg("target_preset") = py::none(), py::arg("source_labels") = py::none(),
+      py::arg("target_labels") = py::none(), py::arg("ground_truth") = py::none(), R"doc(
+Registers ``source`` onto ``target`` globally with quadrics, as ``quadrix register`` does, and returns
+a quadrix.RegistrationResult (transform, status, message, timings_ms, counts, candidates, overlap:
+report.json's content).
+
+source, target: each a quadrix.Cloud, an (N, 3) array (any real dtype; float32 C-contiguous is
+    copied once with memcpy) or a file path (str / os.PathLike, any format read_cloud reads).
+preset: vlp64, vlp16, mid360, avia, monument or auto (default: chosen per cloud from its field of
+    view, rings and size, as ``quadrix register --preset auto``; see ``presets()``).
+config: overrides applied after the presets: a dict in the YAML schema (``config()`` returns one,
+    ``config_keys()`` lists the keys) or the path of a YAML file (as ``--config``).
+refiner: "ceres" or "nlopt" (as ``--refiner``); None keeps the preset's (ceres).
+source_preset, target_preset: per-side presets for cross-sensor pairs (keyword-only).
+source_labels, target_labels: optional SemanticKITTI labels, one per point (as ``--labels-source``).
+ground_truth: optional 4x4 T_gt mapping source into target; the report then has ground_truth
+    {rte_m, rre_deg, success} by the paper's rule (2 m, 5 deg), as ``--gt``.
+
+The GIL is released while the pipeline runs, so threads can register pairs concurrently.
+Raises FileNotFoundError for a missing file, ValueError naming the file for an unreadable one or a
+bad config value, KeyError naming an unknown key of a config dict.
+
+Example::
+
+    source, target = quadrix.read_cloud("000000.bin"), quadrix.read_cloud("004438.ply")
+    result = quadrix.register(source, target)
+    if result.ok:
+        aligned = source.points @ result.transform[:3, :3].T + result.transform[:3, 3]
+)doc");
+}
+
+}  // namespace quadrix::python

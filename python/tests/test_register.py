@@ -1,0 +1,108 @@
+"""quadrix.register: the same answer and report as `quadrix register`, on simulated and real pairs."""
+import json
+
+import numpy as np
+import pytest
+
+import quadrix
+
+
+def rotation_error_degrees(estimate, truth):
+    cosine = (np.trace(estimate[:3, :3].T @ truth[:3, :3]) - 1.0) / 2.0
+    return np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
+
+
+@pytest.fixture(scope="module")
+def street_result(street):
+    pair = street["pairs"][0]
+    return quadrix.register(street["clouds"][pair["source"]], street["clouds"][pair["target"]],
+                            ground_truth=pair["transform"]), pair
+
+
+def test_the_simulated_street_pair_registers(street_result):
+    result, pair = street_result
+    assert result.status == "ok" and result.ok, result.message
+    assert result.transform.shape == (4, 4)
+    assert np.linalg.norm(result.transform[:3, 3] - pair["transform"][:3, 3]) < 0.2
+    assert rotation_error_degrees(result.transform, pair["transform"]) < 1.0
+    assert result.ground_truth["success"] is True
+
+
+def test_the_result_is_report_json(street_result):
+    result, _ = street_result
+    report = json.loads(result.to_json())
+    assert report == result.report
+    np.testing.assert_array_equal(np.array(report["transform"]), result.transform)
+    assert report["status"] == result.status and report["message"] == result.message
+    assert result.timings_ms == report["timings_ms"] and result.timings_ms["total"] >= result.timings_ms["registration"]
+    assert result.counts == report["counts"] and result.counts["correspondences"] > 0
+    assert result.candidates == report["candidates"] and sum(c["selected"] for c in result.candidates) == 1
+    assert result.overlap == report["overlap"] and result.overlap["transformed"] > result.overlap["identity"]
+    assert result.source_model.quadric_count == result.counts["source_quadrics"]
+
+
+def test_arrays_clouds_and_float64_give_the_same_answer(street, street_result):
+    result, pair = street_result
+    source, target = street["clouds"][pair["source"]], street["clouds"][pair["target"]]
+    from_arrays = quadrix.register(np.array(source.points), target.points.astype(np.float64))
+    np.testing.assert_array_equal(from_arrays.transform, result.transform)
+    assert from_arrays.counts == result.counts
+
+
+def test_registering_a_pair_from_files_matches_the_command_line(tmp_path, quadrix_cli, street):
+    pair = street["pairs"][0]
+    source, target = tmp_path / "source.ply", tmp_path / "target.ply"
+    quadrix.write_cloud(source, street["clouds"][pair["source"]])
+    quadrix.write_cloud(target, street["clouds"][pair["target"]])
+    quadrix_cli("register", source, target, "--out", tmp_path / "out")
+    printed = json.loads((tmp_path / "out" / "report.json").read_text())
+    result = quadrix.register(source, target)
+    assert_same_report(result, printed)
+
+
+def assert_same_report(result, printed):
+    """The Python result and the CLI's report.json agree on everything but wall times."""
+    np.testing.assert_array_equal(result.transform, np.array(printed["transform"]))
+    assert result.status == printed["status"] and result.message == printed["message"]
+    assert result.counts == printed["counts"]
+    assert result.report.keys() == printed.keys()
+    assert result.timings_ms.keys() == printed["timings_ms"].keys()
+    assert result.report["input"] == printed["input"]
+    assert result.candidates == printed["candidates"]
+    assert result.overlap == printed["overlap"]
+
+
+def test_kitti_loop_closure_matches_the_command_line(tmp_path, shared_data, quadrix_cli):
+    source = shared_data("kitti00/velodyne/000000.bin")
+    target = shared_data("kitti00/velodyne/004438.ply")
+    truth_file = shared_data("kitti00/gt/T_004438_from_000000.txt")
+    truth = np.loadtxt(truth_file).reshape(4, 4)
+    quadrix_cli("register", source, target, "--gt", truth_file, "--out", tmp_path / "out")
+    printed = json.loads((tmp_path / "out" / "report.json").read_text())
+    result = quadrix.register(str(source), str(target), ground_truth=truth)
+    assert result.status == "ok", result.message
+    assert result.ground_truth["success"] is True
+    assert_same_report(result, printed)
+    assert result.ground_truth == printed["ground_truth"]
+
+
+def test_refiner_and_presets_are_checked():
+    points = np.random.default_rng(1).uniform(-10, 10, (100, 3))
+    with pytest.raises(ValueError, match="gauss"):
+        quadrix.register(points, points, preset="vlp64", refiner="gauss")
+    with pytest.raises(ValueError, match="vlp32"):
+        quadrix.register(points, points, preset="vlp32")
+
+
+def test_too_little_structure_is_a_status_not_an_exception():
+    points = np.random.default_rng(1).uniform(-10, 10, (10, 3))
+    result = quadrix.register(points, points, preset="vlp64")
+    assert result.status == "degenerate" and not result.ok
+    assert "correspondences" in result.message
+    np.testing.assert_array_equal(result.transform, np.eye(4))
+
+
+def test_the_docstring_explains_the_arguments():
+    text = quadrix.register.__doc__
+    for word in ("source", "target", "preset", "config", "refiner", "ground_truth", "transform", "status", "GIL"):
+        assert word in text
