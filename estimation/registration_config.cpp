@@ -268,24 +268,6 @@ std::string type_name(const RegistrationConfigKey& key) {
       key.member(options, ConfigSide::Source));
 }
 
-// The key of the table at the dotted `path`, or nullptr.
-const RegistrationConfigKey* find_key(const std::string& path) {
-  for (const RegistrationConfigKey& key : registration_config_keys())
-    if (key.path == path) return &key;
-  return nullptr;
-}
-
-// The names directly below the section `prefix` ("" for the top level), in table order.
-std::vector<std::string> names_below(const std::string& prefix) {
-  std::vector<std::string> names;
-  for (const RegistrationConfigKey& key : registration_config_keys()) {
-    if (!prefix.empty() && key.path.rfind(prefix + ".", 0) != 0) continue;
-    const std::string rest = prefix.empty() ? key.path : key.path.substr(prefix.size() + 1);
-    const std::string name = rest.substr(0, rest.find('.'));
-    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
-  }
-  return names;
-}
 
 // Collects the keys set by the mapping `node` of the section `prefix` with their values; every name
 // must be a key of the table or a section holding some (else an Error naming the key and the file).
@@ -295,12 +277,12 @@ void collect_keys(const YAML::Node& node, const std::string& prefix, const std::
   for (const auto& entry : node) {
     const std::string name = entry.first.as<std::string>();
     const std::string path = prefix.empty() ? name : prefix + "." + name;
-    if (const RegistrationConfigKey* key = find_key(path)) {
+    if (const RegistrationConfigKey* key = find_registration_config_key(path)) {
       found.emplace_back(key, entry.second);
-    } else if (!names_below(path).empty()) {
+    } else if (!registration_config_names_below(path).empty()) {
       collect_keys(entry.second, path, file, found);
     } else {
-      throw file_error(file, "unknown key '" + path + "' (known here: " + joined(names_below(prefix)) + ")");
+      throw file_error(file, "unknown key '" + path + "' (known here: " + joined(registration_config_names_below(prefix)) + ")");
     }
   }
 }
@@ -315,6 +297,23 @@ RegistrationOptions registration_preset(const std::string& name) {
   options.target_extraction = options.source_extraction;
   apply_registration_differences(name, options);
   return options;
+}
+
+const RegistrationConfigKey* find_registration_config_key(const std::string& path) {
+  for (const RegistrationConfigKey& key : registration_config_keys())
+    if (key.path == path) return &key;
+  return nullptr;
+}
+
+std::vector<std::string> registration_config_names_below(const std::string& prefix) {
+  std::vector<std::string> names;
+  for (const RegistrationConfigKey& key : registration_config_keys()) {
+    if (!prefix.empty() && key.path.rfind(prefix + ".", 0) != 0) continue;
+    const std::string rest = prefix.empty() ? key.path : key.path.substr(prefix.size() + 1);
+    const std::string name = rest.substr(0, rest.find('.'));
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+  }
+  return names;
 }
 
 const std::vector<RegistrationConfigKey>& registration_config_keys() {

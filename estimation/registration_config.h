@@ -48,6 +48,13 @@ struct RegistrationConfigKey {
 /// (`sensor` first: reading it restarts the extraction from that preset before the other keys).
 const std::vector<RegistrationConfigKey>& registration_config_keys();
 
+/// The key of registration_config_keys at the dotted `path` ("extraction.planes.voxel_size"), or nullptr.
+const RegistrationConfigKey* find_registration_config_key(const std::string& path);
+
+/// The names directly below the section `prefix` ("" for the top level), in table order:
+/// "extraction" gives minimum_range, ..., planes, ...; empty when `prefix` is no section.
+std::vector<std::string> registration_config_names_below(const std::string& prefix);
+
 /// The schema of the YAML configuration as text: one line per key of registration_config_keys with
 /// its type (and valid names) and description, plus how `sensor`, `up` and lists are read.
 std::string registration_config_schema();

@@ -154,6 +154,118 @@ PointCloud read_merged_clouds(const ModelCommandOptions& options, const CloudRea
   return merged;
 }
 
+// The model's header fields beside its records in model.json: inputs, preset, fitter, statuses,
+// raw size and the extracted elements per class.
+std::string model_json_extra(const ModelCommandOptions& options, const ModellingOptions& modelling,
+                             const ModellingResult& result, double raw_bytes,
+                             const std::map<std::string, int>& element_counts) {
+  std::string extra = "\"input\": \"" + std::filesystem::path(options.inputs.front()).filename().string() + "\", \"inputs\": " +
+                      std::to_string(options.inputs.size()) + ", \"preset\": \"" +
+                      options.preset + "\", \"fitter\": \"" + modelling.fitter + "\", \"status\": \"" +
+                      modelling_status_name(result.status) + "\", \"extraction_status\": \"" +
+                      extraction_status_name(result.extraction.status) + "\", \"raw_cloud_bytes\": " +
+                      std::to_string(static_cast<long long>(raw_bytes)) + ", \"elements_by_class\": {";
+  bool first = true;
+  for (const auto& [name, count] : element_counts) {
+    extra += std::string(first ? "" : ", ") + "\"" + name + "\": " + std::to_string(count);
+    first = false;
+  }
+  return extra + "}";
+}
+
+// The mesh of every quadric (--mesh) and its picture (--picture), when asked for.
+void write_mesh_outputs(const ModelCommandOptions& options, const ModellingResult& result, const Eigen::Matrix3Xd& points) {
+  if (options.mesh.empty() && options.picture.empty()) return;
+  const TriangleMesh mesh = model_mesh(result, points);
+  if (!options.mesh.empty()) write_mesh_ply(options.mesh, mesh);
+  if (options.picture.empty()) return;
+  if (mesh.triangles.empty()) throw Error("--picture " + options.picture + ": the model has no quadric to draw");
+  MeshPictureOptions view;
+  view.azimuth_deg = options.view_azimuth_deg;
+  view.elevation_deg = options.view_elevation_deg;
+  view.zoom = options.view_zoom;
+  write_mesh_picture(options.picture, mesh, view);
+}
+
+// The interactive page beside the JSON (model.json -> model.html), with the same extents as --mesh.
+// Returns its path, or "" when skipped or not buildable (libjs-three missing: a warning only, since
+// the model is written).
+std::string write_model_page(const ModelCommandOptions& options, const ModellingOptions& modelling,
+                             const ModellingResult& result, const PointCloud& cloud, const Eigen::Matrix3Xd& points) {
+  if (options.no_page) return "";
+  const SceneModel& model = result.model;
+  const std::filesystem::path json_path(options.out);
+  const std::string page_path = json_path.extension() == ".json"
+                                    ? std::filesystem::path(json_path).replace_extension(".html").string()
+                                    : options.out + ".html";  // never the JSON's own path
+  ModelPageInput page;
+  page.title = std::filesystem::path(options.inputs.front()).filename().string() +
+               (options.inputs.size() > 1 ? " + " + std::to_string(options.inputs.size() - 1) + " more" : "");
+  page.status = modelling_status_name(result.status);
+  page.message = result.message;
+  page.facts = {{"preset", options.preset}, {"fitter", modelling.fitter}, {"points", std::to_string(cloud.size())},
+                {"elements", std::to_string(result.extraction.elements.size())},
+                {"records", std::to_string(model.size()) + " (" + std::to_string(model.augmented_count()) + " augmented points)"}};
+  page.quadrics = page_quadrics(model);
+  for (std::size_t i = 0; i < page.quadrics.size(); ++i) {
+    const Element& element = result.extraction.elements[static_cast<std::size_t>(result.record_elements[i])];
+    page.quadrics[i].extent = local_extent_of_points(model.records[i].quadric().decompose(), points, element.point_indices);
+  }
+  page.points = subsample_points(cloud, page.point_budget);
+  page.points_total = cloud.size();
+  try {
+    write_page(page_path, model_page_html(page));
+  } catch (const Error& error) {
+    std::fprintf(stderr, "quadrix: warning: %s not written: %s (--no-page skips it)\n", page_path.c_str(), error.what());
+    return "";
+  }
+  return page_path;
+}
+
+// The terminal summary: counts per class and type, timings, the model's size against the raw
+// cloud's, the ground, and every file written.
+void print_model_summary(const ModelCommandOptions& options, const ModellingOptions& modelling, const ModellingResult& result,
+                         const PointCloud& cloud, const std::map<std::pair<std::string, std::string>, int>& quadric_counts,
+                         std::map<std::string, int> element_counts, std::size_t binary_size, double raw_bytes,
+                         const std::string& page_path) {
+  const SceneModel& model = result.model;
+  std::printf("quadrix model %s%s  (%zu points, %zu in range, preset %s, fitter %s)\n", options.inputs.front().c_str(),
+              options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
+              result.extraction.points_in_range, options.preset.c_str(), modelling.fitter.c_str());
+  std::printf("status: %s%s%s\n\n", modelling_status_name(result.status).c_str(), result.message.empty() ? "" : " - ",
+              result.message.c_str());
+  std::printf("%-12s %-20s %9s %9s\n", "class", "type", "elements", "quadrics");
+  for (const auto& [key, count] : quadric_counts)
+    std::printf("%-12s %-20s %9d %9d\n", key.first.c_str(), key.second.c_str(), element_counts[key.first], count);
+  for (const auto& [name, count] : element_counts) {
+    bool listed = false;
+    for (const auto& [key, unused] : quadric_counts) listed = listed || key.first == name;
+    if (!listed) std::printf("%-12s %-20s %9d %9d\n", name.c_str(), "(not fitted)", count, 0);
+  }
+  std::printf("%-12s %-20s %9s %9zu\n", "augmented", "point", "", model.augmented_count());
+  std::printf("%-12s %-20s %9zu %9zu\n\n", "total", "", result.extraction.elements.size(), model.size());
+  std::printf("timings (ms, 2 shared cores):");
+  for (const char* stage : {"crop", "ground", "planes", "clusters", "lines", "simplification", "normals", "shape_detection",
+                            "fitting", "selection", "augmentation", "total"}) {
+    const auto it = model.timings_ms.find(stage);
+    if (it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);
+  }
+  std::printf("\nmodel: %s binary (%zu records x 21 numbers)", human_bytes(static_cast<double>(binary_size)).c_str(),
+              model.size());
+  if (raw_bytes > 0.0)
+    std::printf(" vs raw cloud %s (%.0fx smaller)", human_bytes(raw_bytes).c_str(), raw_bytes / static_cast<double>(binary_size));
+  std::printf("\nground: %s", model.has_ground ? "found" : "not found");
+  if (model.has_ground)
+    std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f m", model.ground_normal.x(), model.ground_normal.y(),
+                model.ground_normal.z(), model.ground_offset);
+  std::printf("\nwrote %s", options.out.c_str());
+  const std::initializer_list<const std::string*> written = {&options.binary, &options.mesh, &options.elements, &options.picture,
+                                                             &page_path};
+  for (const std::string* path : written)
+    if (!path->empty()) std::printf(", %s", path->c_str());
+  std::printf("\n");
+}
+
 void run(const ModelCommandOptions& options) {
   ExtractionOptions extraction = extraction_preset(options.preset);
   if (options.plane_method == "cgal")
@@ -186,100 +298,14 @@ void run(const ModelCommandOptions& options) {
   for (const std::string& input : options.inputs)
     if (std::filesystem::exists(input)) raw_bytes += static_cast<double>(std::filesystem::file_size(input));
 
-  std::string extra = "\"input\": \"" + std::filesystem::path(options.inputs.front()).filename().string() + "\", \"inputs\": " +
-                      std::to_string(options.inputs.size()) + ", \"preset\": \"" +
-                      options.preset + "\", \"fitter\": \"" + modelling.fitter + "\", \"status\": \"" +
-                      modelling_status_name(result.status) + "\", \"extraction_status\": \"" +
-                      extraction_status_name(result.extraction.status) + "\", \"raw_cloud_bytes\": " +
-                      std::to_string(static_cast<long long>(raw_bytes)) + ", \"elements_by_class\": {";
-  bool first = true;
-  for (const auto& [name, count] : element_counts) {
-    extra += std::string(first ? "" : ", ") + "\"" + name + "\": " + std::to_string(count);
-    first = false;
-  }
-  extra += "}";
-  write_scene_model_json(options.out, model, extra);
+  write_scene_model_json(options.out, model, model_json_extra(options, modelling, result, raw_bytes, element_counts));
   if (!options.binary.empty()) write_scene_model_binary(options.binary, model);
   const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
-  if (!options.mesh.empty() || !options.picture.empty()) {
-    const TriangleMesh mesh = model_mesh(result, points);
-    if (!options.mesh.empty()) write_mesh_ply(options.mesh, mesh);
-    if (!options.picture.empty()) {
-      if (mesh.triangles.empty()) throw Error("--picture " + options.picture + ": the model has no quadric to draw");
-      MeshPictureOptions view;
-      view.azimuth_deg = options.view_azimuth_deg;
-      view.elevation_deg = options.view_elevation_deg;
-      view.zoom = options.view_zoom;
-      write_mesh_picture(options.picture, mesh, view);
-    }
-  }
+  write_mesh_outputs(options, result, points);
   if (!options.elements.empty()) write_point_cloud(options.elements, element_cloud(result, cloud));
-  // The interactive page beside the JSON (model.json -> model.html): the same extents as --mesh.
-  std::string page_path;
-  if (!options.no_page) {
-    const std::filesystem::path json_path(options.out);
-    page_path = json_path.extension() == ".json" ? std::filesystem::path(json_path).replace_extension(".html").string()
-                                                 : options.out + ".html";  // never the JSON's own path
-    ModelPageInput page;
-    page.title = std::filesystem::path(options.inputs.front()).filename().string() +
-                 (options.inputs.size() > 1 ? " + " + std::to_string(options.inputs.size() - 1) + " more" : "");
-    page.status = modelling_status_name(result.status);
-    page.message = result.message;
-    page.facts = {{"preset", options.preset}, {"fitter", modelling.fitter}, {"points", std::to_string(cloud.size())},
-                  {"elements", std::to_string(result.extraction.elements.size())},
-                  {"records", std::to_string(model.size()) + " (" + std::to_string(model.augmented_count()) + " augmented points)"}};
-    page.quadrics = page_quadrics(model);
-    for (std::size_t i = 0; i < page.quadrics.size(); ++i) {
-      const Element& element = result.extraction.elements[static_cast<std::size_t>(result.record_elements[i])];
-      page.quadrics[i].extent = local_extent_of_points(model.records[i].quadric().decompose(), points, element.point_indices);
-    }
-    page.points = subsample_points(cloud, page.point_budget);
-    page.points_total = cloud.size();
-    // The model is written: a page that cannot be built (libjs-three missing) is a warning only.
-    try {
-      write_page(page_path, model_page_html(page));
-    } catch (const Error& error) {
-      std::fprintf(stderr, "quadrix: warning: %s not written: %s (--no-page skips it)\n", page_path.c_str(), error.what());
-      page_path.clear();
-    }
-  }
-
-  std::printf("quadrix model %s%s  (%zu points, %zu in range, preset %s, fitter %s)\n", options.inputs.front().c_str(),
-              options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
-              result.extraction.points_in_range, options.preset.c_str(), modelling.fitter.c_str());
-  std::printf("status: %s%s%s\n\n", modelling_status_name(result.status).c_str(), result.message.empty() ? "" : " - ",
-              result.message.c_str());
-  std::printf("%-12s %-20s %9s %9s\n", "class", "type", "elements", "quadrics");
-  for (const auto& [key, count] : quadric_counts)
-    std::printf("%-12s %-20s %9d %9d\n", key.first.c_str(), key.second.c_str(), element_counts[key.first], count);
-  for (const auto& [name, count] : element_counts) {
-    bool listed = false;
-    for (const auto& [key, unused] : quadric_counts) listed = listed || key.first == name;
-    if (!listed) std::printf("%-12s %-20s %9d %9d\n", name.c_str(), "(not fitted)", count, 0);
-  }
-  std::printf("%-12s %-20s %9s %9zu\n", "augmented", "point", "", model.augmented_count());
-  std::printf("%-12s %-20s %9zu %9zu\n\n", "total", "", result.extraction.elements.size(), model.size());
-  std::printf("timings (ms, 2 shared cores):");
-  for (const char* stage : {"crop", "ground", "planes", "clusters", "lines", "simplification", "normals", "shape_detection",
-                            "fitting", "selection", "augmentation", "total"}) {
-    const auto it = model.timings_ms.find(stage);
-    if (it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);
-  }
-  std::printf("\nmodel: %s binary (%zu records x 21 numbers)", human_bytes(static_cast<double>(binary_bytes.size())).c_str(),
-              model.size());
-  if (raw_bytes > 0.0)
-    std::printf(" vs raw cloud %s (%.0fx smaller)", human_bytes(raw_bytes).c_str(),
-                raw_bytes / static_cast<double>(binary_bytes.size()));
-  std::printf("\nground: %s", model.has_ground ? "found" : "not found");
-  if (model.has_ground)
-    std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f m", model.ground_normal.x(), model.ground_normal.y(),
-                model.ground_normal.z(), model.ground_offset);
-  std::printf("\nwrote %s", options.out.c_str());
-  const std::initializer_list<const std::string*> written = {&options.binary, &options.mesh, &options.elements, &options.picture,
-                                                             &page_path};
-  for (const std::string* path : written)
-    if (!path->empty()) std::printf(", %s", path->c_str());
-  std::printf("\n");
+  const std::string page_path = write_model_page(options, modelling, result, cloud, points);
+  print_model_summary(options, modelling, result, cloud, quadric_counts, element_counts, binary_bytes.size(), raw_bytes,
+                      page_path);
 }
 
 const CommandRegistration registration(50, [](CLI::App& app) {

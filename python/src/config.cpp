@@ -26,34 +26,16 @@ namespace {
 // Name a dict is reported under in errors of the shared YAML reader.
 constexpr const char* kDictName = "<config dict>";
 
-const RegistrationConfigKey* find_key(const std::string& path) {
-  for (const RegistrationConfigKey& key : registration_config_keys())
-    if (key.path == path) return &key;
-  return nullptr;
-}
-
-// The names directly below the section `prefix` ("" = top level).
-std::vector<std::string> names_below(const std::string& prefix) {
-  std::vector<std::string> names;
-  const std::string start = prefix.empty() ? "" : prefix + ".";
-  for (const RegistrationConfigKey& key : registration_config_keys()) {
-    if (key.path.compare(0, start.size(), start) != 0) continue;
-    const std::string rest = key.path.substr(start.size());
-    const std::string name = rest.substr(0, rest.find('.'));
-    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
-  }
-  return names;
-}
 
 // KeyError for the first key of `section` that is neither a key of the table nor a section of some.
 void check_keys(const py::dict& section, const std::string& prefix) {
   for (const auto& [name_object, value] : section) {
     const std::string name = py::str(name_object).cast<std::string>();
     const std::string path = prefix.empty() ? name : prefix + "." + name;
-    if (find_key(path) != nullptr) continue;
+    if (find_registration_config_key(path) != nullptr) continue;
     std::string known;
-    for (const std::string& each : names_below(prefix)) known += (known.empty() ? "" : ", ") + each;
-    if (names_below(path).empty())
+    for (const std::string& each : registration_config_names_below(prefix)) known += (known.empty() ? "" : ", ") + each;
+    if (registration_config_names_below(path).empty())
       throw py::key_error("unknown configuration key '" + path + "' (known here: " + known + ")");
     if (!py::isinstance<py::dict>(value))
       throw py::value_error("configuration key '" + path + "' is a section: expected a dict");

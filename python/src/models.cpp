@@ -1,6 +1,7 @@
 // quadrix.Model, quadrix.model, quadrix.load_model and quadrix.fit: the scene representation of one
 // cloud (paper §"Quadric Modeling", Struct. 1) and one quadric fitted to a segment (`quadrix fit`).
 #include "bindings.h"
+#include "experiments/reports/fit_report.h"
 
 #include "estimation/registration_config.h"
 #include "fitting/quadric_fitter.h"
@@ -31,49 +32,9 @@ std::string derived_status(const SceneModel& model) {
   return modelling_status_name(model.augmented_begin > 0 ? ModellingStatus::Ok : ModellingStatus::Empty);
 }
 
-// A JSON number as `quadrix fit` prints it: non-finite numbers are null there, None here.
-py::object number(double value) { return std::isfinite(value) ? py::object(py::float_(value)) : py::object(py::none()); }
-
-py::list numbers(const Eigen::Vector3d& values) {
-  py::list list;
-  for (int i = 0; i < 3; ++i) list.append(number(values(i)));
-  return list;
-}
-
-// The dict `quadrix fit` prints as JSON (experiments/command_line/command_fit.cpp, fit_to_json),
-// with the same keys in the same order.
-py::dict fit_dict(const QuadricFit& fit, const std::string& fitter_name, std::size_t point_count) {
-  py::dict result;
-  result["fitter"] = fitter_name;
-  result["status"] = fit_status_name(fit.status);
-  if (!fit.message.empty()) result["message"] = fit.message;
-  result["type"] = quadric_type_name(fit.type);
-  result["points"] = point_count;
-  const Vector10d q = fit.quadric.normalized().parameters();
-  py::list q_list;
-  for (int i = 0; i < 10; ++i) q_list.append(number(q(i)));
-  result["q"] = q_list;
-  result["scale"] = numbers(fit.shape.scale);
-  py::list rotation;
-  for (int row = 0; row < 3; ++row)
-    for (int column = 0; column < 3; ++column) rotation.append(number(fit.shape.rotation(row, column)));
-  result["rotation"] = rotation;
-  result["center"] = numbers(fit.shape.center);
-  py::dict degeneracy;
-  degeneracy["scale"] = numbers(fit.shape.indicators.scale);
-  degeneracy["rotation"] = numbers(fit.shape.indicators.rotation);
-  degeneracy["translation"] = numbers(fit.shape.indicators.translation);
-  result["degeneracy"] = degeneracy;
-  result["statistical_scale"] = numbers(fit.statistics.scale);
-  result["statistical_center"] = numbers(fit.statistics.center);
-  result["residual_rms"] = number(fit.residual_rms);
-  result["residual_max"] = number(fit.residual_max);
-  result["f_p2s"] = number(fit.algebraic_distance);
-  result["time_ms"] = number(fit.time_ms);
-  result["residual_evaluation"] = residual_evaluation_name(fit.residual_evaluation);
-  result["residual_points"] = static_cast<long long>(fit.residual_points);
-  result["evaluation_ms"] = number(fit.evaluation_ms);
-  return result;
+// The dict `quadrix fit` prints as JSON: the same fit_report_json, parsed.
+py::object fit_dict(const QuadricFit& fit, const std::string& fitter_name, std::size_t point_count) {
+  return json_loads(fit_report_json(fit, fitter_name, point_count, -1));
 }
 
 }  // namespace

@@ -1,0 +1,18 @@
+// One quadric fit as JSON, shared by `quadrix fit` and the Python module's quadrix.fit so the two
+// cannot drift: fitter, status, message, type, points, the normalised q (paper Eq. 2), scale,
+// rotation, centre, degeneracy indicators (I_s, I_R, I_t), statistical pose, residuals, f_p2s, times.
+#pragma once
+
+#include "fitting/quadric_fitter.h"
+
+#include <cstddef>
+#include <string>
+
+namespace quadrix {
+
+/// `fit` of `point_count` points by `fitter_name` as a JSON object text (non-finite numbers are
+/// null), indented by `indent` spaces (-1: one line).
+std::string fit_report_json(const QuadricFit& fit, const std::string& fitter_name, std::size_t point_count,
+                            int indent = 2);
+
+}  // namespace quadrix
