@@ -197,9 +197,8 @@ std::vector<RegistrationCandidate> estimate_candidates(const SceneModel& source,
   for (std::size_t level = 0; level < cliques.levels.size(); ++level) {
     const std::vector<int>& clique = cliques.levels[level].clique;
     // A level whose clique equals the previous level's gives the same candidate: reuse it.
-    RegistrationCandidate candidate =
-        level > 0 && clique == cliques.levels[level - 1].clique ? candidates.back() : RegistrationCandidate{};
     const bool reused = level > 0 && clique == cliques.levels[level - 1].clique;
+    RegistrationCandidate candidate = reused ? candidates.back() : RegistrationCandidate{};
     candidate.level = level;
     candidate.threshold = graphs.thresholds[level];
     candidate.clique_size = clique.size();

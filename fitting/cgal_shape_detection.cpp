@@ -486,8 +486,8 @@ void simplify_on_grid(const Eigen::Matrix3Xd& points, double voxel, std::vector<
   }
 }
 
-/// The representatives as CGAL points with normals: the given normals, or +z placeholders when the
-/// cloud has none (estimate_oriented_normals replaces them).
+/// The representatives as CGAL points with normals: the cloud's own normals when it has them, else
+/// +z as the initial value that detect_shapes always overwrites with estimate_oriented_normals.
 PointWithNormalVector representatives_with_normals(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals,
                                                    bool have_normals, const std::vector<std::uint32_t>& representatives) {
   PointWithNormalVector input;

@@ -35,6 +35,10 @@ struct Model {
   std::string message;  ///< why, when not ok (empty for a loaded model)
 };
 
+/// The status of a model without a modelling run (read from a file, or a registration's side): ok
+/// with at least one quadric, else empty.
+std::string derived_status(const SceneModel& model);
+
 /// The (N, 3) float32 positions of `cloud` from `points`: any (N, 3) real array; float32 C-contiguous
 /// input is copied once with memcpy (each row is one column of the column-major Matrix3Xf), any
 /// other dtype or layout is converted in one pass. Throws ValueError for another shape or a

@@ -27,10 +27,6 @@ py::array_t<double> record_rows(const SceneModel& model, std::size_t begin, std:
   return array;
 }
 
-// The status a model read from a file gets: ok with at least one quadric (ModellingStatus::Ok), else empty.
-std::string derived_status(const SceneModel& model) {
-  return modelling_status_name(model.augmented_begin > 0 ? ModellingStatus::Ok : ModellingStatus::Empty);
-}
 
 // The dict `quadrix fit` prints as JSON: the same fit_report_json, parsed.
 py::object fit_dict(const QuadricFit& fit, const std::string& fitter_name, std::size_t point_count) {
@@ -38,6 +34,10 @@ py::object fit_dict(const QuadricFit& fit, const std::string& fitter_name, std::
 }
 
 }  // namespace
+
+std::string derived_status(const SceneModel& model) {
+  return modelling_status_name(model.augmented_begin > 0 ? ModellingStatus::Ok : ModellingStatus::Empty);
+}
 
 void bind_models(py::module_& module) {
   py::class_<Model, std::shared_ptr<Model>>(module, "Model", R"doc(

@@ -31,7 +31,7 @@ py::object report_entry(const Registration& registration, const char* key) {
 std::shared_ptr<Model> side_model(const SceneModel& scene) {
   auto model = std::make_shared<Model>();
   model->model = scene;
-  model->status = modelling_status_name(scene.augmented_begin > 0 ? ModellingStatus::Ok : ModellingStatus::Empty);
+  model->status = derived_status(scene);
   return model;
 }
 
