@@ -186,6 +186,9 @@ std::vector<MethodSummary> summarize_bench(const std::vector<BenchRow>& rows, co
         continue;
       }
       ++summary.with_ground_truth;
+      StatusOutcome& outcome = summary.outcomes_by_kind[row.kind.empty() ? "-" : row.kind][row.status];
+      ++(row.success ? outcome.right : outcome.wrong);
+      if (row.status == "ok" && !row.success) ++summary.ok_and_wrong;
       auto& bin = summary.by_difficulty[row.difficulty];
       ++bin.second;
       summary.rte_values.push_back(row.rte);
@@ -240,6 +243,7 @@ std::string bench_summary_text(const std::vector<MethodSummary>& summaries) {
     text << "  median " << format("%.0f", s.median_total_ms) << " ms (p90 " << format("%.0f", s.p90_total_ms) << ")";
     if (s.time_ratio_to_quadrix > 0.0) text << "  x" << format("%.2f", s.time_ratio_to_quadrix) << " Quadrix's time";
     if (s.without_ground_truth) text << "  no ground truth: " << s.without_ground_truth;
+    if (s.with_ground_truth && s.statuses.count("ok")) text << "  ok and wrong: " << s.ok_and_wrong;
     text << "\n";
   }
   return text.str();
@@ -288,6 +292,15 @@ std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, 
       md << "\n";
     }
   }
+  md << "\n## Status against ground truth\n\nEach status as right / wrong by the success rule, per pair kind "
+        "(rows with ground truth). `ok` and wrong is the error `ok` must never make.\n\n"
+        "| method | kind | status: right / wrong |\n|---|---|---|\n";
+  for (const MethodSummary& s : summaries)
+    for (const auto& [kind, outcomes] : s.outcomes_by_kind) {
+      md << "| " << s.method << " | " << kind << " |";
+      for (const auto& [status, outcome] : outcomes) md << " " << status << " " << outcome.right << " / " << outcome.wrong << ";";
+      md << " |\n";
+    }
   md << "\n## Time per stage (median / p90, ms)\n\n| method | stage | median | p90 |\n|---|---|---|---|\n";
   for (const MethodSummary& s : summaries) {
     std::vector<std::string> stages = ordered_stages(s.stage_ms);

@@ -156,14 +156,14 @@ struct RunContext {
   SharedCache<PointCloud> clouds;
   SharedCache<CachedModel> models;
   std::mutex preset_mutex;
-  std::map<std::string, RegistrationOptions> resolved;  // cloud path -> its options, resolved once (auto: measured, with up axis and crop)
+  std::map<std::string, RegistrationOptions> resolved;  // cloud path (and corruption) -> its options, resolved once (auto: measured, with up axis and crop)
 
   // The options `quadrix register` would use for this cloud on either side (resolve_registration_options).
-  RegistrationOptions options_of(const std::string& path, const PointCloud& cloud) {
+  RegistrationOptions options_of(const std::string& key, const PointCloud& cloud) {
     std::lock_guard<std::mutex> lock(preset_mutex);
-    auto found = resolved.find(path);
+    auto found = resolved.find(key);
     if (found == resolved.end())
-      found = resolved.emplace(path, resolve_registration_options(options->preset, cloud, options->preset, cloud)).first;
+      found = resolved.emplace(key, resolve_registration_options(options->preset, cloud, options->preset, cloud)).first;
     return found->second;
   }
 
@@ -180,12 +180,17 @@ struct RunContext {
 
 std::string model_key(const std::string& path, const std::string& side) { return side + "|" + path; }
 
-BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input, const PointCloud& original_source,
-                              BenchRow& row) {
+// `unmoved_source` is the source before any perturbation (damaged when a corruption is set): the
+// options are resolved on it, as `quadrix register` would resolve them on the file it is given.
+BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input, const PointCloud& unmoved_source,
+                              std::uint64_t seed, BenchRow& row) {
   const BenchPair& pair = *input.pair;
+  const std::string& corruption = context.options->corruption;
+  const std::string source_key = corruption.empty() ? pair.source : pair.source + "|" + corruption + "|" + std::to_string(seed);
   const RegistrationOptions registration =
-      context.options_for(context.options_of(pair.source, original_source), context.options_of(pair.target, *input.target));
+      context.options_for(context.options_of(source_key, unmoved_source), context.options_of(pair.target, *input.target));
   const bool perturbed = context.options->yaw_range_degrees > 0.0 || context.options->translation_range > 0.0;
+  const bool own_source_model = perturbed || !context.options->corruption.empty();  // not the cached one
   const auto build = [](const PointCloud& cloud, const ExtractionOptions& extraction, const ModellingOptions& modelling) {
     CachedModel cached;
     const Clock::time_point start = Clock::now();
@@ -194,7 +199,7 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
     return cached;
   };
   std::shared_ptr<const CachedModel> source_model;
-  if (perturbed) {
+  if (own_source_model) {
     // The perturbed sensor sits at the perturbation's origin with its up axis rotated: tell extraction.
     ExtractionOptions extraction = registration.source_extraction;
     extraction.sensor_origin = input.perturbation * extraction.sensor_origin;
@@ -257,10 +262,15 @@ std::vector<BenchRow> run_task(RunContext& context, const Task& task) {
   const std::uint64_t seed = options.seed * 1000003ULL + task.index;
   const Eigen::Isometry3d perturbation = perturbation_of(options, seed);
   const bool perturbed = options.yaw_range_degrees > 0.0 || options.translation_range > 0.0;
-  const PointCloud moved_source = perturbed ? transformed(*source, perturbation) : PointCloud();
+  const Corruption corruption = parse_corruption(options.corruption);
+  // The source is damaged in its own frame (the sensor at the origin), then moved.
+  const PointCloud corrupted_source =
+      corruption.kind == CorruptionKind::None ? PointCloud() : corrupt_cloud(*source, corruption, seed);
+  const PointCloud& damaged_source = corruption.kind == CorruptionKind::None ? *source : corrupted_source;
+  const PointCloud moved_source = perturbed ? transformed(damaged_source, perturbation) : PointCloud();
   BenchMethodInput input;
   input.pair = &pair;
-  input.source = perturbed ? &moved_source : source.get();
+  input.source = perturbed ? &moved_source : &damaged_source;
   input.target = target.get();
   input.perturbation = perturbation;
 
@@ -289,7 +299,7 @@ std::vector<BenchRow> run_task(RunContext& context, const Task& task) {
       if (extra) {
         output = extra(input);
       } else if (method == "quadrix") {
-        output = run_quadrix(context, input, *source, row);
+        output = run_quadrix(context, input, damaged_source, seed, row);
       } else {
         output = run_baseline_method(method, input, options.baseline);
       }
@@ -311,7 +321,7 @@ std::vector<BenchRow> run_task(RunContext& context, const Task& task) {
   }
   const bool quadrix_ran = std::find(options.methods.begin(), options.methods.end(), "quadrix") != options.methods.end();
   if (quadrix_ran) {
-    if (!perturbed) context.models.release(model_key(pair.source, "source"));
+    if (!perturbed && corruption.kind == CorruptionKind::None) context.models.release(model_key(pair.source, "source"));
     context.models.release(model_key(pair.target, "target"));
   }
   context.clouds.release(pair.source);
@@ -432,6 +442,7 @@ std::vector<BenchRow> run_benchmark(const std::vector<BenchPair>& pairs, const B
     apply_registration_config(options.config, probe);  // bad files fail before any work
   }
   if (!options.refiner.empty()) make_refiner(options.refiner);
+  parse_corruption(options.corruption);  // an unknown name is an Error listing the forms
   RegistrationOptions probe;
   apply_ablation(options.ablation, probe);
 
@@ -449,7 +460,7 @@ std::vector<BenchRow> run_benchmark(const std::vector<BenchPair>& pairs, const B
       context.clouds.expect(pairs[p].source);
       context.clouds.expect(pairs[p].target);
       if (quadrix_runs) {
-        if (!perturbing) context.models.expect(model_key(pairs[p].source, "source"));
+        if (!perturbing && options.corruption.empty()) context.models.expect(model_key(pairs[p].source, "source"));
         context.models.expect(model_key(pairs[p].target, "target"));
       }
     }

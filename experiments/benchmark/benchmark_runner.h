@@ -9,6 +9,7 @@
 #include "estimation/registration.h"
 #include "experiments/baselines/baseline_protocol.h"
 #include "experiments/benchmark/bench_pairs.h"
+#include "experiments/benchmark/fault_injection.h"
 #include "fitting/scene_model.h"
 
 #include <Eigen/Geometry>
@@ -50,6 +51,7 @@ struct BenchOptions {
   std::string ablation;                         ///< bench_ablation_names() entry, or "" for the defaults
   double yaw_range_degrees = 0.0;               ///< trials rotate the source by a yaw uniform in [-range, range] about the up axis
   double translation_range = 0.0;               ///< and translate it uniformly within a horizontal disc of this radius, m
+  std::string corruption;                       ///< fault injected into every source cloud (parse_corruption name; "" none)
   int trials = 1;                               ///< random perturbations per pair (1 with both ranges 0: the pair as given)
   std::uint64_t seed = 1;                       ///< seed of the perturbations; task k uses seed * 1000003 + k (recorded per row)
   int jobs = 1;                                 ///< tasks run in parallel
@@ -118,6 +120,12 @@ using BenchProgress = std::function<void(std::size_t done, std::size_t total, co
 std::vector<BenchRow> run_benchmark(const std::vector<BenchPair>& pairs, const BenchOptions& options,
                                     const BenchProgress& progress = {});
 
+/// How many rows of one status were right (success) and how many wrong, among rows with ground truth.
+struct StatusOutcome {
+  std::size_t right = 0;  ///< rows that met the success rule
+  std::size_t wrong = 0;  ///< rows that did not
+};
+
 /// Per-method summary of rows.
 struct MethodSummary {
   std::string method;                      ///< method name
@@ -127,6 +135,8 @@ struct MethodSummary {
   std::size_t without_ground_truth = 0;    ///< rows reported as "no ground truth"
   std::map<std::string, std::size_t> statuses;  ///< rows per status word
   std::map<std::string, std::pair<std::size_t, std::size_t>> by_difficulty;  ///< difficulty -> (successes, with ground truth)
+  std::map<std::string, std::map<std::string, StatusOutcome>> outcomes_by_kind;  ///< pair kind -> status -> right / wrong (ground truth only)
+  std::size_t ok_and_wrong = 0;            ///< rows with status ok that failed the success rule: the error `ok` must never make
   double median_rte = 0.0;                 ///< median RTE of successes, m
   double median_rre = 0.0;                 ///< median RRE of successes, degrees
   double mean_rte = 0.0;                   ///< mean RTE of successes, m
@@ -150,7 +160,8 @@ struct MethodSummary {
 std::vector<MethodSummary> summarize_bench(const std::vector<BenchRow>& rows, const std::vector<std::string>& methods);
 
 /// The Markdown summary: one table per method line (success, RTE/RRE, IR/CR, median/p90 time,
-/// ratio to Quadrix, bytes per frame), success per difficulty, time per stage, statuses.
+/// ratio to Quadrix, bytes per frame), success per difficulty, each status right / wrong per pair
+/// kind (the confusion table), time per stage, statuses.
 std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, const std::string& title);
 
 /// Short plain-text summary for the terminal: per method success on pairs with ground truth,

@@ -178,6 +178,7 @@ void run(BenchCommandOptions& options) {
   if (!bench.config.empty()) options_text << " --config " << bench.config;
   if (!bench.refiner.empty()) options_text << " --refiner " << bench.refiner;
   if (!bench.ablation.empty()) options_text << " --ablation " << bench.ablation;
+  if (!bench.corruption.empty()) options_text << " --corrupt " << bench.corruption;
   options_text << " --yaw-range " << bench.yaw_range_degrees << " --translation-range " << bench.translation_range
                << " --trials " << bench.trials << " --seed " << bench.seed << " --baseline-voxel " << bench.baseline.voxel_size;
   BenchRunInfo info;
@@ -240,6 +241,11 @@ const CommandRegistration registration(70, [](CLI::App& app) {
                       "Random yaw of the source about the up axis, uniform in [-DEG, DEG]")->capture_default_str();
   command->add_option("--translation-range", options->bench.translation_range,
                       "Random horizontal translation of the source, uniform in a disc of this radius, m")->capture_default_str();
+  std::string corruptions;
+  for (const auto& name : standard_corruption_names()) corruptions += (corruptions.empty() ? "" : ", ") + name;
+  command->add_option("--corrupt", options->bench.corruption,
+                      "Damage every source cloud (seeded per task): drop-P, sector-D, outliers-P, noise-S (20% of points), "
+                      "duplicate, scale-F; e.g. " + corruptions);
   command->add_option("--trials", options->bench.trials, "Random perturbations per pair")->capture_default_str();
   command->add_option("--seed", options->bench.seed, "Seed of the perturbations (task k uses seed * 1000003 + k)")->capture_default_str();
   command->add_option("--jobs", options->bench.jobs, "Pairs run in parallel")->capture_default_str();
