@@ -65,7 +65,14 @@ const std::vector<std::string>& csv_columns() {
       "task",          "pair_id",      "trial",          "method",  "difficulty",         "kind",
       "has_gt",        "status",       "success",        "rte_m",   "rre_deg",            "yaw_deg",
       "shift_x_m",     "shift_y_m",    "seed",           "correspondences", "inliers",   "recalled",
-      "source_model_bytes", "target_model_bytes", "timings_ms", "message"};
+      "source_model_bytes", "target_model_bytes", "overlap", "identity_overlap", "timings_ms", "message"};
+  return columns;
+}
+
+// The columns of files written before "overlap" and "identity_overlap" were added.
+std::vector<std::string> columns_without_overlap() {
+  std::vector<std::string> columns = csv_columns();
+  columns.erase(std::find(columns.begin(), columns.end(), "overlap"), std::find(columns.begin(), columns.end(), "timings_ms"));
   return columns;
 }
 
@@ -330,7 +337,8 @@ void write_bench_rows_csv(const std::string& path, const std::vector<BenchRow>& 
           << (r.has_ground_truth ? exact(r.rte) : "") << "," << (r.has_ground_truth ? exact(r.rre) : "") << ","
           << exact(r.yaw_degrees) << "," << exact(r.shift_x) << "," << exact(r.shift_y) << "," << r.seed << ","
           << r.correspondences << "," << r.inliers << "," << r.recalled << "," << r.source_model_bytes << ","
-          << r.target_model_bytes << "," << csv_field(timings_text(r.timings_ms)) << "," << csv_field(r.message) << "\n";
+          << r.target_model_bytes << "," << exact(r.overlap) << "," << exact(r.identity_overlap) << ","
+          << csv_field(timings_text(r.timings_ms)) << "," << csv_field(r.message) << "\n";
     }
   });
 }
@@ -341,12 +349,15 @@ std::vector<BenchRow> read_bench_rows_csv(const std::string& path) {
   std::string line;
   std::size_t line_number = 0;
   std::vector<BenchRow> rows;
-  const std::vector<std::string>& columns = csv_columns();
+  std::vector<std::string> columns = csv_columns();
+  bool has_overlap = true;
   while (std::getline(file, line)) {
     ++line_number;
     const std::string where = path + ":" + std::to_string(line_number);
     const std::vector<std::string> fields = parse_csv_fields(line);
     if (line_number == 1) {
+      has_overlap = fields == columns;
+      if (!has_overlap) columns = columns_without_overlap();
       if (fields != columns) throw Error(where + ": header is not the benchmark row header (" + columns.front() + ",...)");
       continue;
     }
@@ -396,7 +407,12 @@ std::vector<BenchRow> read_bench_rows_csv(const std::string& path) {
     r.recalled = static_cast<int>(integer(17));
     r.source_model_bytes = integer(18);
     r.target_model_bytes = integer(19);
-    std::istringstream timings(fields[20]);
+    const std::size_t after_bytes = has_overlap ? 22 : 20;  // index of timings_ms
+    if (has_overlap) {
+      r.overlap = number(20);
+      r.identity_overlap = number(21);
+    }
+    std::istringstream timings(fields[after_bytes]);
     for (std::string entry; std::getline(timings, entry, ';');) {
       const auto equals = entry.find('=');
       if (equals == std::string::npos) throw Error(where + ": timings entry '" + entry + "' is not name=ms");
@@ -406,7 +422,7 @@ std::vector<BenchRow> read_bench_rows_csv(const std::string& path) {
         throw Error(where + ": timings entry '" + entry + "' is not name=ms");
       }
     }
-    r.message = fields[21];
+    r.message = fields[after_bytes + 1];
     rows.push_back(std::move(r));
   }
   if (line_number == 0) throw file_error(path, "empty file (expected the benchmark row header)");

@@ -230,6 +230,10 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   row.source_model_bytes = static_cast<long long>(scene_model_to_binary(result.source_model).size());
   row.target_model_bytes = static_cast<long long>(scene_model_to_binary(result.target_model).size());
   row.correspondences = static_cast<long long>(result.counts.correspondences);
+  if (result.overlap) {
+    row.overlap = result.overlap->transformed;
+    row.identity_overlap = result.overlap->identity;
+  }
   if (pair.ground_truth) {
     const Eigen::Isometry3d truth = *pair.ground_truth * input.perturbation.inverse();
     const CorrespondenceSet set =

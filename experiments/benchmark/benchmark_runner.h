@@ -83,6 +83,8 @@ struct BenchRow {
   int recalled = -1;               ///< >= 3 inliers: 1 / 0 (quadrix with ground truth; -1 otherwise)
   long long source_model_bytes = -1;  ///< binary model size of the source frame (quadrix; -1 otherwise)
   long long target_model_bytes = -1;  ///< binary model size of the target frame (quadrix; -1 otherwise)
+  double overlap = -1.0;            ///< fraction of the source landing on the target under the answer (quadrix; -1 otherwise)
+  double identity_overlap = -1.0;   ///< the same without moving the source (quadrix; -1 otherwise)
   std::map<std::string, double> timings_ms;  ///< per stage and "total" (cloud in memory -> transform), ms
   std::string message;             ///< status message
 };
@@ -173,7 +175,8 @@ std::vector<std::string> parse_csv_fields(const std::string& line);
 
 /// Writes rows as CSV (header + one row each; numbers with 17 significant digits), atomically.
 void write_bench_rows_csv(const std::string& path, const std::vector<BenchRow>& rows);
-/// Reads write_bench_rows_csv output; throws quadrix::Error naming the file and line.
+/// Reads write_bench_rows_csv output (also files written before the overlap columns existed, whose
+/// rows get overlap -1); throws quadrix::Error naming the file and line.
 std::vector<BenchRow> read_bench_rows_csv(const std::string& path);
 
 /// Description of a run stored beside its rows (run.json): what merge needs to check and rebuild.
