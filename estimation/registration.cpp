@@ -88,7 +88,8 @@ bool registration_succeeded(const Eigen::Isometry3d& estimate, const Eigen::Isom
 RegistrationStatus decide_registration_status(const RegistrationFindings& findings) {
   if (findings.estimation_failure) return *findings.estimation_failure;
   const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
-  return sure && !findings.fits_worse_than_identity ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
+  const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little;
+  return sure && fits ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
 }
 
 namespace {
@@ -397,11 +398,20 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
     const bool was_ok = result.status == RegistrationStatus::Ok;
     result.findings.fits_worse_than_identity =
         options.overlap_margin >= 0.0 && overlap.sampled > 0 && overlap.transformed < overlap.identity - options.overlap_margin;
+    // The floor: a wrong answer that happens to score well among the quadrics rarely puts much of
+    // the source on the target (AmbiguityOptions::minimum_overlap; docs/registration.md says how it was set).
+    result.findings.overlaps_too_little = overlap.sampled > 0 && overlap.transformed < options.minimum_overlap;
     if (was_ok && result.findings.fits_worse_than_identity) {
       std::ostringstream why;
       why.precision(2);
       why << "; but only " << overlap.transformed << " of the source lands within " << overlap.distance
           << " m of the target, against " << overlap.identity << " left where it is (margin " << options.overlap_margin << ")";
+      result.message += why.str();
+    } else if (was_ok && result.findings.overlaps_too_little) {
+      std::ostringstream why;
+      why.precision(2);
+      why << "; but only " << overlap.transformed << " of the source lands within " << overlap.distance
+          << " m of the target, below the floor of " << options.minimum_overlap;
       result.message += why.str();
     }
     // Only an `ok` answer is demoted here; any other status stands as it is.
@@ -482,6 +492,7 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
   if (!settled) return;
   result.transform = search.optima[search.best].transform;
   result.findings.fits_worse_than_identity = false;  // measured again on the new answer below
+  result.findings.overlaps_too_little = false;
   decide(result);
 }
 

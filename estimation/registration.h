@@ -67,6 +67,7 @@ struct AmbiguityOptions {
   double rotation_disagreement_degrees = 5.0; ///< or rotated more than this apart, degrees (success rule: 5 deg)
   std::size_t minimum_clique_for_ok = 5;      ///< a winner supported by a smaller clique is `ambiguous`: 3 or 4 mutually consistent pairs arise by chance among hundreds
   double overlap_margin = 0.15;               ///< an `ok` answer whose dense overlap (check_overlap) is below the unmoved source's by more than this fraction is `ambiguous` (negative: no check)
+  double minimum_overlap = 0.4;               ///< an `ok` answer must land at least this fraction of the source (above its ground) within 0.3 m of the target, else `ambiguous` (0: no floor)
 };
 
 /// Every option of register_clouds; defaults are the paper's (§"Implementation Details").
@@ -124,12 +125,14 @@ struct RegistrationFindings {
   bool scores_close = false;              ///< the winner nearly ties a disagreeing candidate (AmbiguityOptions::score_ratio)
   bool weak_support = false;              ///< the winner's clique is smaller than AmbiguityOptions::minimum_clique_for_ok
   bool fits_worse_than_identity = false;  ///< the answer's overlap is below the unmoved source's by more than overlap_margin
+  bool overlaps_too_little = false;       ///< the answer lands less of the source on the target than AmbiguityOptions::minimum_overlap
   bool settled_by_dense_search = false;   ///< the dense search replaced an unsure answer by a clear winner
 };
 
 /// The status of a registration from its findings, the one place a status is decided: the estimation
 /// failure when there is one; otherwise `ok` when the answer is sure (no close rival and enough support,
-/// or settled by the dense search) and fits the points at least as well as not moving; else `ambiguous`.
+/// or settled by the dense search), fits the points at least as well as not moving and overlaps the
+/// target by at least the floor; else `ambiguous`.
 RegistrationStatus decide_registration_status(const RegistrationFindings& findings);
 
 /// Everything register_clouds returns.

@@ -140,6 +140,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::rotation_disagreement_degrees>("ambiguity.rotation_disagreement_degrees", "or rotated more than this apart, degrees"),
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_clique_for_ok>("ambiguity.minimum_clique_for_ok", "a winner supported by a smaller clique is ambiguous, correspondences"),
       shared_key<&R::ambiguity, &AmbiguityOptions::overlap_margin>("ambiguity.overlap_margin", "an ok answer overlapping less than the unmoved source by more than this is ambiguous, fraction (negative: no check)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::minimum_overlap>("ambiguity.minimum_overlap", "an ok answer landing less than this fraction of the source within 0.3 m of the target is ambiguous, fraction (0: no floor)"),
       // dense_search
       shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),
       shared_key<&R::dense_search, &DenseSearchOptions::voxel_size>("dense_search.voxel_size", "both clouds thinned to one point per cube of this edge, m (> 0)"),
@@ -378,6 +379,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
   }
   try {
     validate_dense_search_options(options.dense_search);
+    if (!(options.ambiguity.minimum_overlap >= 0.0 && options.ambiguity.minimum_overlap <= 1.0))
+      throw Error("ambiguity.minimum_overlap must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.minimum_overlap));
   } catch (const Error& error) {
     throw file_error(path, error.what());
   }

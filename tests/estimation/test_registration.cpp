@@ -181,6 +181,12 @@ TEST(DecideRegistrationStatus, OkOnlyWhenSureAndFittingAtLeastAsWellAsNotMoving)
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.scores_close = true; }), RegistrationStatus::Ambiguous);
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.weak_support = true; }), RegistrationStatus::Ambiguous);
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.fits_worse_than_identity = true; }), RegistrationStatus::Ambiguous);
+  EXPECT_EQ(status_of([](RegistrationFindings& f) { f.overlaps_too_little = true; }), RegistrationStatus::Ambiguous);
+  EXPECT_EQ(status_of([](RegistrationFindings& f) {
+              f.settled_by_dense_search = true;
+              f.overlaps_too_little = true;
+            }),
+            RegistrationStatus::Ambiguous);
   // The dense search settles an unsure answer, but a settled answer must still fit at least as well as not moving.
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.scores_close = f.weak_support = f.settled_by_dense_search = true; }),
             RegistrationStatus::Ok);
@@ -231,9 +237,19 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   EXPECT_EQ(wrong.status, RegistrationStatus::Ambiguous);
   EXPECT_NE(wrong.message.find("left where it is"), std::string::npos) << wrong.message;
   EXPECT_TRUE(wrong.transform.isApprox(Eigen::Translation3d(8.0, 0.0, 0.0) * truth));  // reported, not replaced
-  // The check is a margin: switched off (negative), or an answer already not `ok`, stays as it is.
+  // The floor alone (margin switched off) demotes it too: it puts less than 40% of the source on the target.
+  AmbiguityOptions floor_only;
+  floor_only.overlap_margin = -1.0;
+  ASSERT_LT(wrong.overlap->transformed, floor_only.minimum_overlap);
+  wrong.status = RegistrationStatus::Ok;
+  wrong.message = "candidate of level 0";
+  check_overlap(wrong, source, target, floor_only);
+  EXPECT_EQ(wrong.status, RegistrationStatus::Ambiguous);
+  EXPECT_NE(wrong.message.find("below the floor of 0.4"), std::string::npos) << wrong.message;
+  // Both checks switched off (negative margin, zero floor), or an answer already not `ok`, stays as it is.
   AmbiguityOptions off;
   off.overlap_margin = -1.0;
+  off.minimum_overlap = 0.0;
   wrong.status = RegistrationStatus::Ok;
   check_overlap(wrong, source, target, off);
   EXPECT_EQ(wrong.status, RegistrationStatus::Ok);
