@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= 2
 CMAKE_ARGS ?=
 
-.PHONY: all setup configure build test demo clean train-fitter papers study-refiners
+.PHONY: all setup configure build test demo clean train-fitter papers study-refiners fuzz fuzz-build fuzz-smoke
 
 all: build
 
@@ -18,6 +18,7 @@ build: configure
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j$(JOBS)
+	$(MAKE) fuzz-smoke
 
 # The demo needs only the `quadrix` executable: no tests, baselines or micro-benchmarks are compiled.
 demo: configure
@@ -26,6 +27,26 @@ demo: configure
 
 clean:
 	rm -rf $(BUILD_DIR)
+
+# Fuzzing (docs/reliability.md): a separate clang build in $(FUZZ_DIR) with libFuzzer, ASan and
+# UBSan that compiles only the four libraries and the harnesses of tests/fuzz, then runs each
+# harness for $(SECONDS) s (and at most $(RUNS) executions when set) with seeds cut from $(DATA_DIR),
+# and writes $(FUZZ_DIR)/fuzz-summary.md. Fails when a harness crashed, leaked, hung or ran out of memory.
+# `make fuzz-smoke` is the same with 3 s a harness; `make test` runs it after ctest.
+FUZZ_DIR ?= build-fuzz
+SECONDS ?= 60
+RUNS ?= 0
+fuzz-build: setup
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=Debug -DQUADRIX_FUZZ=ON \
+	  -DQUADRIX_BUILD_TESTS=OFF -DQUADRIX_BUILD_BENCHMARKS=OFF -DQUADRIX_BUILD_PYTHON=OFF \
+	  -DCGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE=TRUE
+	cmake --build $(FUZZ_DIR) -j$(JOBS) --target fuzz_harnesses
+
+fuzz: fuzz-build
+	/usr/bin/python3 tests/fuzz/run_fuzz.py --build $(FUZZ_DIR) --seconds $(SECONDS) --runs $(RUNS) --data $(DATA_DIR)
+
+fuzz-smoke:
+	$(MAKE) fuzz SECONDS=3 RUNS=0
 
 # Regenerates the committed refiner study (papers/studies/refiners.{md,csv,svg}) with its
 # fixed seeds; needs ../shared/data for the KITTI part (skipped with a note when absent).
