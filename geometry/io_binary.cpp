@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace quadrix {
 namespace io_internal {
@@ -158,16 +159,20 @@ NumpyMatrix read_npy_matrix(const std::string& path) {
   const bool swap = order == '>';
   const std::size_t item = scalar_size(type);
   const std::size_t data_start = header_start + header_length;
-  const std::size_t needed = matrix.rows * matrix.columns * item;
-  if (matrix.columns != 0 && matrix.rows > (bytes.size / matrix.columns / item) + 1)
-    throw file_error(path, ".npy data truncated: shape " + shape_text + " needs " + std::to_string(needed) +
-                               " bytes, file has " + std::to_string(bytes.size - data_start));
+  const bool overflows =
+      matrix.rows != 0 && matrix.columns > std::numeric_limits<std::size_t>::max() / item / matrix.rows;
+  const std::size_t needed = overflows ? 0 : matrix.rows * matrix.columns * item;
+  if (overflows || needed > bytes.size - data_start)
+    throw file_error(path, ".npy data truncated: shape " + shape_text + " needs " +
+                               (overflows ? std::string("more than 2^64") : std::to_string(needed)) + " bytes, file has " +
+                               std::to_string(bytes.size - data_start));
   if (bytes.size - data_start != needed)
     throw file_error(path, ".npy data size mismatch: shape " + shape_text + " of " + descr + " needs " +
                                std::to_string(needed) + " bytes after the header, file has " +
                                std::to_string(bytes.size - data_start) +
                                (bytes.size - data_start < needed ? " (truncated)" : ""));
   matrix.values.resize(matrix.rows * matrix.columns);
+  if (matrix.values.empty()) return matrix;  // N x 0 or 0 x N: no column to decode
   const char* source = bytes.data.get() + data_start;
   const bool fortran_order = fortran == "True";
   std::vector<double> column(matrix.rows);
@@ -187,6 +192,9 @@ PointCloud read_npy_cloud(const std::string& path, const CloudReadOptions& optio
   if (matrix.columns < 3)
     throw file_error(path, ".npy array has " + std::to_string(matrix.columns) +
                                " column(s); a point cloud needs N x 3 or more (x, y, z first)");
+  if (matrix.columns > kMaxValuesPerPoint)
+    throw file_error(path, ".npy array has " + std::to_string(matrix.columns) + " columns, more than the " +
+                               std::to_string(kMaxValuesPerPoint) + " values a point this reader supports");
   const std::vector<std::string> names = headerless_column_names(matrix.columns);
   std::vector<FieldColumn> columns(matrix.columns);
   for (std::size_t c = 0; c < matrix.columns; ++c) {

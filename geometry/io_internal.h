@@ -37,6 +37,10 @@ bool scalar_is_floating(ScalarType type);
 void decode_strided(const char* source, std::size_t stride, std::size_t count, ScalarType type, bool swap_bytes,
                     double* destination);
 
+/// Most values a point a cloud reader accepts (the sum of a PCD header's COUNTs, the columns of a
+/// .npy array): each becomes a column, and a file of zero points has no data to bound their number.
+inline constexpr std::size_t kMaxValuesPerPoint = 65536;
+
 /// One per-point field as read from a file, before its role (position, intensity, ...) is assigned.
 struct FieldColumn {
   std::string name;             ///< field name as in the file (or from headerless_column_names)

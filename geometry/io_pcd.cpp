@@ -106,6 +106,7 @@ PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
     throw file_error(path, "PCD header: COUNT has " + std::to_string(count_text.size()) + " entries for " +
                                std::to_string(n) + " FIELDS");
   std::size_t offset = 0;
+  std::size_t values_per_point = 0;
   for (std::size_t f = 0; f < n; ++f) {
     PcdField& field = header.fields[f];
     if (!parse_size(size_text[f], field.size))
@@ -116,6 +117,11 @@ PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
     if (!count_text.empty() && (!parse_size(count_text[f], field.count) || field.count == 0))
       throw file_error(path, "PCD header: COUNT of field '" + field.name + "' is '" + count_text[f] +
                                  "' (expected a positive integer)");
+    values_per_point += field.count;
+    if (field.count > kMaxValuesPerPoint || values_per_point > kMaxValuesPerPoint)
+      throw file_error(path, "PCD header: COUNT of field '" + field.name + "' is " + count_text[f] +
+                                 ", more than the " + std::to_string(kMaxValuesPerPoint) +
+                                 " values a point this reader supports");
     const std::string kind = std::string(1, field.type) + std::to_string(field.size);
     if (kind == "I1") field.scalar = ScalarType::Int8;
     else if (kind == "U1") field.scalar = ScalarType::UInt8;
@@ -164,10 +170,17 @@ struct PcdColumns {
     columns[targets[f].columns[1]].values[row] = (packed >> 8) & 0xFF;
     columns[targets[f].columns[2]].values[row] = packed & 0xFF;
   }
+  // Appends a packed 0x00RRGGBB colour of field `f`.
+  void append_color(std::size_t f, std::uint32_t packed) {
+    columns[targets[f].columns[0]].values.push_back((packed >> 16) & 0xFF);
+    columns[targets[f].columns[1]].values.push_back((packed >> 8) & 0xFF);
+    columns[targets[f].columns[2]].values.push_back(packed & 0xFF);
+  }
 };
 
-PcdColumns pcd_columns(const PcdHeader& header, CloudReadReport& report) {
-  const std::size_t rows = header.points;
+// The columns, each sized to `rows` values (binary data, whose size was checked) or empty (ascii,
+// appended line by line: the header's count is not sized before the lines are there).
+PcdColumns pcd_columns(const PcdHeader& header, std::size_t rows, CloudReadReport& report) {
   PcdColumns result;
   result.targets.resize(header.fields.size());
   report.fields.clear();
@@ -223,9 +236,9 @@ void read_pcd_ascii(const std::string& path, const FileBytes& bytes, const PcdHe
           } else {
             packed = static_cast<std::uint32_t>(value);
           }
-          columns.store_color(f, row, packed);
+          columns.append_color(f, packed);
         } else {
-          columns.columns[columns.targets[f].columns[c]].values[row] = value;
+          columns.columns[columns.targets[f].columns[c]].values.push_back(value);
         }
       }
     }
@@ -236,11 +249,11 @@ void read_pcd_ascii(const std::string& path, const FileBytes& bytes, const PcdHe
                                std::to_string(row) + " lines");
 }
 
-// The binary body of a binary or binary_compressed PCD, checked against the header's POINTS x record
-// size; binary_compressed is LZF-decompressed into `storage`.
-const char* pcd_binary_body(const std::string& path, const FileBytes& bytes, const PcdHeader& header,
-                            std::unique_ptr<char[]>& storage) {
-  const char* body = bytes.data.get() + header.body_offset;
+// Checks binary data after the header can hold the POINTS the header declares, before anything is
+// sized to that count: binary needs POINTS x record size bytes, binary_compressed an uncompressed
+// size of POINTS x record size from an LZF stream inside the file (LZF expands at most 88-fold: a
+// 3-byte back reference copies at most 264 bytes).
+void check_binary_data_size(const std::string& path, const FileBytes& bytes, const PcdHeader& header) {
   const std::size_t available = bytes.size - header.body_offset;
   const std::size_t rows = header.points;
   const std::size_t stride = header.point_stride;
@@ -252,9 +265,10 @@ const char* pcd_binary_body(const std::string& path, const FileBytes& bytes, con
       throw file_error(path, "truncated: binary data needs " + std::to_string(rows) + " points x " + std::to_string(stride) +
                                  " bytes = " + std::to_string(needed) + " bytes, only " + std::to_string(available) +
                                  " follow the header");
-    return body;
+    return;
   }
   if (available < 8) throw file_error(path, "truncated: binary_compressed data has no size words");
+  const char* body = bytes.data.get() + header.body_offset;
   std::uint32_t compressed_size = 0, uncompressed_size = 0;
   std::memcpy(&compressed_size, body, 4);
   std::memcpy(&uncompressed_size, body + 4, 4);
@@ -264,6 +278,20 @@ const char* pcd_binary_body(const std::string& path, const FileBytes& bytes, con
   if (compressed_size > available - 8)
     throw file_error(path, "truncated: binary_compressed data declares " + std::to_string(compressed_size) +
                                " compressed bytes, only " + std::to_string(available - 8) + " follow");
+  if (needed > 88 * static_cast<std::size_t>(compressed_size))
+    throw file_error(path, "binary_compressed: " + std::to_string(compressed_size) + " compressed bytes cannot hold " +
+                               std::to_string(needed) + " uncompressed bytes (LZF expands at most 88-fold)");
+}
+
+// The binary body of a binary or binary_compressed PCD (sizes checked by check_binary_data_size);
+// binary_compressed is LZF-decompressed into `storage`.
+const char* pcd_binary_body(const std::string& path, const FileBytes& bytes, const PcdHeader& header,
+                            std::unique_ptr<char[]>& storage) {
+  const char* body = bytes.data.get() + header.body_offset;
+  if (header.data != "binary_compressed") return body;
+  const std::size_t needed = header.points * header.point_stride;
+  std::uint32_t compressed_size = 0;
+  std::memcpy(&compressed_size, body, 4);
   storage.reset(new char[needed > 0 ? needed : 1]);
   if (needed > 0) {
     const unsigned int produced =
@@ -306,7 +334,9 @@ void read_pcd_binary(const std::string& path, const FileBytes& bytes, const PcdH
 PointCloud read_pcd_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report) {
   const FileBytes bytes = read_file_bytes(path);
   const PcdHeader header = parse_pcd_header(path, bytes.view());
-  PcdColumns columns = pcd_columns(header, report);
+  const bool ascii = header.data == "ascii";
+  if (!ascii) check_binary_data_size(path, bytes, header);
+  PcdColumns columns = pcd_columns(header, ascii ? 0 : header.points, report);
   if (header.data == "ascii") read_pcd_ascii(path, bytes, header, columns);
   else read_pcd_binary(path, bytes, header, columns);
   report.encoding = header.data;

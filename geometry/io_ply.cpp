@@ -158,18 +158,25 @@ class PlyBodyReader {
                                 " records but the data ends in record " + std::to_string(record));
   }
 
+  // Refuses a binary element count the rest of the file cannot hold, before anything is sized to it:
+  // a record takes at least one scalar or list length per property.
+  void check_binary_count_fits(const PlyElement& element) const {
+    const std::size_t remaining = text_.size() - position_;
+    std::size_t minimum = 0;
+    for (const PlyProperty& property : element.properties)
+      minimum += scalar_size(property.is_list ? property.count_type : property.type);
+    if (minimum != 0 && element.count > remaining / minimum)
+      throw file_error(path_, "truncated: element '" + element.name + "' needs " + std::to_string(element.count) +
+                                  " records of " + (element.has_list() ? "at least " : "") + std::to_string(minimum) +
+                                  " bytes but only " + std::to_string(remaining) + " bytes follow the header");
+  }
+
   void read_binary(const PlyElement& element, const std::vector<std::vector<double>*>& outputs, int list_index,
                    std::vector<double>* list_values, std::vector<std::size_t>* list_sizes) {
     const bool swap = header_.encoding == PlyEncoding::BinaryBigEndian;
-    const std::size_t remaining = text_.size() - position_;
+    check_binary_count_fits(element);
     if (!element.has_list()) {
-      const std::size_t stride = element.scalar_stride();
-      if (stride != 0 && element.count > remaining / stride) {
-        throw file_error(path_, "truncated: element '" + element.name + "' needs " + std::to_string(element.count) +
-                                    " records of " + std::to_string(stride) + " bytes (" +
-                                    std::to_string(element.count * stride) + " bytes) but only " +
-                                    std::to_string(remaining) + " bytes follow the header");
-      }
+      const std::size_t stride = element.scalar_stride();  // the whole element fits: check_binary_count_fits
       std::size_t offset = 0;
       for (std::size_t p = 0; p < element.properties.size(); ++p) {
         if (p < outputs.size() && outputs[p]) {
@@ -217,10 +224,11 @@ class PlyBodyReader {
     }
   }
 
+  // Values are appended line by line (never sized to the header's count first, which the file may not hold).
   void read_ascii(const PlyElement& element, const std::vector<std::vector<double>*>& outputs, int list_index,
                   std::vector<double>* list_values, std::vector<std::size_t>* list_sizes) {
     for (std::size_t p = 0; p < outputs.size(); ++p)
-      if (outputs[p]) outputs[p]->resize(element.count);
+      if (outputs[p]) outputs[p]->clear();
     std::string_view line;
     for (std::size_t record = 0; record < element.count; ++record) {
       do {
@@ -244,13 +252,17 @@ class PlyBodyReader {
         const PlyProperty& property = element.properties[p];
         if (!property.is_list) {
           const double value = next_number(property);
-          if (p < outputs.size() && outputs[p]) (*outputs[p])[record] = value;
+          if (p < outputs.size() && outputs[p]) outputs[p]->push_back(value);
           continue;
         }
         const double length_value = next_number(property);
         if (!(length_value >= 0 && length_value == std::floor(length_value)))
           throw file_error(path_, where + "list '" + property.name + "' length '" + std::to_string(length_value) +
                                       "' is not a non-negative integer");
+        if (length_value > static_cast<double>(tokens_.size() - token))
+          throw file_error(path_, where + "list '" + property.name + "' length " + std::string(tokens_[token - 1]) +
+                                      " exceeds the " + std::to_string(tokens_.size() - token) +
+                                      " values left on the line");
         const std::size_t length = static_cast<std::size_t>(length_value);
         for (std::size_t k = 0; k < length; ++k) {
           const double value = next_number(property);

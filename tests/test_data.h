@@ -1,4 +1,5 @@
-// Access to the real data in ../shared/data for tests: skip with a clear message when absent.
+// Access for tests to the real data in ../shared/data (skip with a clear message when absent) and to
+// the crash reproducers of the fuzz harnesses (tests/fuzz/regressions).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -17,6 +18,11 @@ inline std::filesystem::path shared_data_root() {
 
 /// Full path of a file under the data root (no existence check).
 inline std::string shared_data_path(const std::string& relative) { return (shared_data_root() / relative).string(); }
+
+/// Full path of a crash reproducer the fuzz harness `harness` found (tests/fuzz/regressions/<harness>/<name>).
+inline std::string fuzz_regression_path(const std::string& harness, const std::string& name) {
+  return (std::filesystem::path(QUADRIX_FUZZ_REGRESSIONS_DIR) / harness / name).string();
+}
 
 }  // namespace quadrix::testing
 

@@ -302,5 +302,72 @@ TEST(IoErrors, TruncatedRealFiles) {
   }
 }
 
+// Crash reproducers of the fuzz harnesses (tests/fuzz/regressions/<harness>/): each is now an Error
+// naming the file and what was wrong, found before anything is sized to a count in the file.
+void expect_reproducer_error(const std::string& harness, const std::string& name, const std::string& detail) {
+  const std::string path = testing::fuzz_regression_path(harness, name);
+  ASSERT_TRUE(std::filesystem::exists(path)) << path;
+  EXPECT_THAT([&] { read_point_cloud(path); }, ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr(detail))));
+}
+
+TEST(IoErrorsFuzzRegressions, NpyWithZeroRowsAndBillionsOfColumns) {
+  // shape (0, 400000000000): decoding looped over every column; the cloud reader then allocated one each.
+  expect_reproducer_error("npy", "rows_0_columns_4e11.npy", ".npy array has 400000000000 columns, more than the 65536");
+  const std::string path = testing::fuzz_regression_path("npy", "rows_0_columns_4e11.npy");
+  EXPECT_THAT([&] { read_pose_matrix(path); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr("4x4 or 3x4 array, found 0x400000000000"))));
+}
+
+TEST(IoErrorsFuzzRegressions, PcdCountBeyondTheValuesAPointSupported) {
+  // COUNT 19999999 for two points: 20 million columns were allocated before the data size was checked.
+  expect_reproducer_error("pcd", "count_19999999.pcd", "COUNT of field 'x' is 19999999, more than the 65536 values");
+}
+
+// Header counts a PCD body cannot hold are refused before any allocation sized to them (ascii
+// columns grow line by line instead).
+TEST(IoErrorsFuzzRegressions, PcdPointCountsTheDataCannotHold) {
+  ScratchDirectory scratch;
+  const std::string path = scratch.file("huge.pcd");
+  const std::string header = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1000000000000\nPOINTS 1000000000000\n";
+  expect_read_error(path, header + "DATA ascii\n1 2 3\n", "header declares 1000000000000 points, the data has 1 lines");
+  expect_read_error(path, header + "DATA binary\n" + float_records({1, 2, 3}), "truncated: binary data needs");
+  const std::string small = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 100000\nPOINTS 100000\nDATA binary_compressed\n";
+  std::string lzf = small;
+  append_raw(lzf, std::uint32_t{4});
+  append_raw(lzf, std::uint32_t{1200000});
+  lzf += std::string("\xe0\xff\x00\x00", 4);
+  expect_read_error(path, lzf, "4 compressed bytes cannot hold 1200000 uncompressed bytes");
+  // An empty LZF stream: PCL's decoder reads its first control byte before checking the length.
+  std::string empty_stream = small;
+  append_raw(empty_stream, std::uint32_t{0});
+  append_raw(empty_stream, std::uint32_t{1200000});
+  expect_read_error(path, empty_stream, "0 compressed bytes cannot hold 1200000 uncompressed bytes");
+}
+
+TEST(IoErrorsFuzzRegressions, PlyElementCountBeyondTheFileSize) {
+  // An ascii vertex count of 444444444444442: 3 columns of that many values were allocated before the
+  // first line was read. Ascii columns now grow line by line, and line 12 is not a number (the message
+  // quotes the token, whose first byte is NUL, so what() ends there).
+  const std::string name = "vertex_count_444444444444442.ply";
+  expect_reproducer_error("ply_mesh", name, "line 12: '");
+  const std::string path = testing::fuzz_regression_path("ply_mesh", name);
+  EXPECT_THAT([&] { read_mesh_ply(path); }, ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr("line 12: '"))));
+  // The same count in a binary file is refused before anything is sized to it.
+  ScratchDirectory scratch;
+  expect_read_error(scratch.file("huge.ply"),
+                    "ply\nformat binary_little_endian 1.0\nelement vertex 444444444444442\nproperty float x\n"
+                    "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                    "end_header\n" + float_records({1, 2, 3}),
+                    "element 'vertex' needs 444444444444442 records of 12 bytes but only 12 bytes follow");
+}
+
+TEST(IoErrorsFuzzRegressions, PlyAsciiListLengthInfinity) {
+  // A face list of length "inf" passed the integer check and was cast to std::size_t: undefined behaviour.
+  const std::string path = testing::fuzz_regression_path("ply_mesh", "list_length_inf.ply");
+  EXPECT_THAT([&] { read_mesh_ply(path); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(path), HasSubstr("line 25: list 'vertex_indices' length inf exceeds "
+                                                                   "the 3 values left on the line"))));
+}
+
 }  // namespace
 }  // namespace quadrix
