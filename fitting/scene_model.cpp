@@ -92,6 +92,9 @@ void validate_scene_model(const SceneModel& model) {
   if (model.augmented_begin > count)
     throw Error("scene model: augmented_begin " + std::to_string(model.augmented_begin) + " exceeds the record count " +
                 std::to_string(count));
+  if (model.source_point_count > kMaxExactSourcePoints)
+    throw Error("scene model: source_point_count " + std::to_string(model.source_point_count) +
+                " exceeds 2^53, the largest count the JSON format holds exactly");
   const std::size_t augmented = count - model.augmented_begin;
   if (!model.augmented_descriptors.empty() && model.augmented_descriptors.size() != augmented)
     throw Error("scene model: augmented_descriptors has " + std::to_string(model.augmented_descriptors.size()) +
@@ -105,6 +108,12 @@ void validate_scene_model(const SceneModel& model) {
   }
   if (!model.ground_normal.allFinite() || !std::isfinite(model.ground_offset))
     throw Error("scene model: ground normal or offset is not finite");
+  for (std::size_t index = 0; index < model.augmented_descriptors.size(); ++index)
+    for (const float value : model.augmented_descriptors[index])
+      if (!std::isfinite(value))
+        throw Error("scene model: augmented descriptor " + std::to_string(index) + " has a non-finite number");
+  for (const auto& [name, milliseconds] : model.timings_ms)
+    if (!std::isfinite(milliseconds)) throw Error("scene model: timing '" + name + "' is not finite");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -448,6 +457,9 @@ class JsonParser {
       char* end = nullptr;
       value.number = std::strtod(begin, &end);
       if (end == begin) fail("expected a JSON value");
+      if (!std::isfinite(value.number))
+        fail("number '" + std::string(begin, static_cast<std::size_t>(end - begin)) +
+             "' is not finite (NaN, infinity or out of the double range)");
       value.kind = JsonValue::Kind::Number;
       position_ += static_cast<std::size_t>(end - begin);
     }
@@ -478,7 +490,16 @@ class JsonParser {
         case 't': out += '\t'; break;
         case 'u': {
           if (position_ + 4 > text_.size()) fail("short \\u escape");
-          const unsigned code = static_cast<unsigned>(std::stoul(text_.substr(position_, 4), nullptr, 16));
+          unsigned code = 0;
+          for (int digit = 0; digit < 4; ++digit) {
+            const char hex = text_[position_ + digit];
+            const int value = hex >= '0' && hex <= '9'   ? hex - '0'
+                              : hex >= 'a' && hex <= 'f' ? hex - 'a' + 10
+                              : hex >= 'A' && hex <= 'F' ? hex - 'A' + 10
+                                                         : -1;
+            if (value < 0) fail("\\u escape '" + text_.substr(position_, 4) + "' is not 4 hexadecimal digits");
+            code = code * 16 + static_cast<unsigned>(value);
+          }
           position_ += 4;
           if (code < 0x80) {
             out += static_cast<char>(code);
@@ -502,6 +523,9 @@ class JsonParser {
   std::string source_;
   std::size_t position_ = 0;
 };
+
+// 2^64: the integers a JSON number may hold for a std::size_t field are those below it.
+constexpr double kTwoToThe64 = 18446744073709551616.0;
 
 const JsonValue& member(const JsonValue& object, const std::string& key, const std::string& where,
                         const std::string& source, JsonValue::Kind kind) {
@@ -627,8 +651,8 @@ SceneModel scene_model_from_json(const std::string& text, const std::string& sou
   model.ground_normal = Eigen::Vector3d(normal[0], normal[1], normal[2]);
   model.ground_offset = member(ground, "offset", "ground", source_name, Kind::Number).number;
   const double augmented_begin = member(document, "augmented_begin", "document", source_name, Kind::Number).number;
-  if (!(augmented_begin >= 0.0 && std::floor(augmented_begin) == augmented_begin))
-    throw file_error(source_name, "augmented_begin: expected a non-negative integer");
+  if (!(augmented_begin >= 0.0 && std::floor(augmented_begin) == augmented_begin && augmented_begin < kTwoToThe64))
+    throw file_error(source_name, "augmented_begin: expected a non-negative integer below 2^64");
   model.augmented_begin = static_cast<std::size_t>(augmented_begin);
   const JsonValue& descriptors = member(document, "augmented_descriptors", "document", source_name, Kind::Array);
   for (std::size_t index = 0; index < descriptors.items.size(); ++index) {
@@ -640,8 +664,8 @@ SceneModel scene_model_from_json(const std::string& text, const std::string& sou
   }
   const JsonValue& stats = member(document, "stats", "document", source_name, Kind::Object);
   const double source_points = member(stats, "source_points", "stats", source_name, Kind::Number).number;
-  if (!(source_points >= 0.0 && std::floor(source_points) == source_points))
-    throw file_error(source_name, "stats.source_points: expected a non-negative integer");
+  if (!(source_points >= 0.0 && std::floor(source_points) == source_points && source_points < kTwoToThe64))
+    throw file_error(source_name, "stats.source_points: expected a non-negative integer below 2^64");
   model.source_point_count = static_cast<std::size_t>(source_points);
   const JsonValue& timings = member(stats, "timings_ms", "stats", source_name, Kind::Object);
   for (const auto& [name, value] : timings.members) {

@@ -65,8 +65,13 @@ ElementClass element_class_from_name(const std::string& name);
 /// Every element class in ascending value order.
 const std::vector<ElementClass>& all_element_classes();
 
+/// Largest source_point_count a model may hold: 2^53; every count up to it survives the JSON
+/// format's numbers (doubles) exactly.
+inline constexpr std::size_t kMaxExactSourcePoints = std::size_t{1} << 53;
+
 /// Checks the invariants (parallel vectors of equal size, augmented_begin <= size, one descriptor
-/// per augmented point or none, finite numbers, known labels); throws quadrix::Error naming the field.
+/// per augmented point or none, finite numbers, known labels, source_point_count at most
+/// kMaxExactSourcePoints); throws quadrix::Error naming the field.
 void validate_scene_model(const SceneModel& model);
 
 /// Binary scene-model format, version 1 (all little-endian, IEEE-754):

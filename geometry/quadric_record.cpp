@@ -76,7 +76,11 @@ QuadricRecord QuadricRecord::from_array(const std::array<double, 21>& values) {
   for (int i = 0; i < 10; ++i) record.q[i] = values[1 + i];
   for (int i = 0; i < 3; ++i) record.full_scale[i] = values[11 + i];
   Eigen::Quaterniond rotation(values[14], values[15], values[16], values[17]);
-  const double norm = rotation.norm();
+  double norm = rotation.norm();
+  if (std::isinf(norm)) {  // the squares overflowed: scale by the largest coefficient first
+    rotation.coeffs() /= rotation.coeffs().cwiseAbs().maxCoeff();
+    norm = rotation.norm();
+  }
   if (!(norm > 1e-12))
     throw Error("quadric record: fields 14-17 (full_rotation w, x, y, z) must be a non-zero quaternion");
   if (std::abs(norm - 1.0) > 1e-12) rotation.coeffs() /= norm;  // unit input round-trips bit for bit

@@ -240,6 +240,61 @@ TEST(SceneModelling, CorruptedFilesGiveClearErrors) {
   }
 }
 
+// Crash reproducers of the fuzz harnesses (tests/fuzz/regressions/scene_model_*): a model file
+// either fails with an Error naming it or gives a model both writers accept and read back.
+TEST(SceneModellingFuzzRegressions, BinaryModels) {
+  const auto expect_error = [](const std::string& name, const std::string& detail) {
+    const std::string path = testing::fuzz_regression_path("scene_model_binary", name);
+    try {
+      read_scene_model_binary(path);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find(path), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find(detail), std::string::npos) << error.what();
+    }
+  };
+  // A NaN descriptor was accepted, and the JSON writer then failed on it.
+  expect_error("nan_descriptor.qsm", "augmented descriptor 0 has a non-finite number");
+  // A count above 2^53 was accepted, and came back changed through the JSON format.
+  expect_error("source_points_above_2_53.qsm", "source_point_count 2522015791327481760 exceeds 2^53");
+  // A quaternion of about 3e231: its squared norm overflowed and it became the zero rotation.
+  const SceneModel model =
+      read_scene_model_binary(testing::fuzz_regression_path("scene_model_binary", "rotation_squares_overflow.qsm"));
+  ASSERT_EQ(model.size(), 3u);
+  EXPECT_NEAR(model.records[2].full_rotation.norm(), 1.0, 1e-12);
+  EXPECT_EQ(scene_model_from_json(scene_model_to_json(model)).records[2].to_array(), model.records[2].to_array());
+}
+
+TEST(SceneModellingFuzzRegressions, JsonModels) {
+  const auto expect_error = [](const std::string& name, const std::string& detail) {
+    const std::string path = testing::fuzz_regression_path("scene_model_json", name);
+    try {
+      read_scene_model_json(path);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find(path), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find(detail), std::string::npos) << error.what();
+    }
+  };
+  // "\u," threw std::invalid_argument out of std::stoul.
+  expect_error("bad_u_escape.json", "is not 4 hexadecimal digits");
+  // augmented_begin 01e400 (infinity) was cast to std::size_t: undefined behaviour.
+  expect_error("augmented_begin_1e400.json", "line 14: number '01e400' is not finite");
+  // version 1e4000: the message came from the JSON writer and did not name the file.
+  expect_error("version_1e4000.json", "number '1e4000' is not finite");
+  // A finite number too large for std::size_t is refused before the cast as well.
+  std::string text = scene_model_to_json(SceneModel{});
+  text.replace(text.find("\"augmented_begin\": 0"), 20, "\"augmented_begin\": 1e300");
+  try {
+    scene_model_from_json(text, "big.json");
+    ADD_FAILURE() << "augmented_begin 1e300 was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("big.json: augmented_begin: expected a non-negative integer below 2^64"),
+              std::string::npos)
+        << error.what();
+  }
+}
+
 TEST(SceneModelling, DegenerateInputsGiveValidModels) {
   PointCloud empty;
   const ModellingResult nothing = model_scene(empty, extraction_preset("vlp64"), ModellingOptions());
