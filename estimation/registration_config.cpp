@@ -159,15 +159,22 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
   };
 }
 
-// Reads one scalar of type T at `key`, naming the file and key on a type error.
+// Reads one scalar of type T at `key`, naming the file and key on a type error. Numbers must be
+// finite: YAML's .inf and .nan mean nothing to any option (and would not be written back as YAML).
 template <typename T>
 T scalar(const YAML::Node& node, const std::string& file, const std::string& key) {
   if (!node.IsScalar()) throw file_error(file, "key '" + key + "' must be a scalar");
+  T value;
   try {
-    return node.as<T>();
+    value = node.as<T>();
   } catch (const YAML::Exception&) {
     throw file_error(file, "key '" + key + "' has an invalid value '" + node.Scalar() + "'");
   }
+  if constexpr (std::is_floating_point_v<T>) {
+    if (!std::isfinite(value))
+      throw file_error(file, "key '" + key + "' must be a finite number, got '" + node.Scalar() + "'");
+  }
+  return value;
 }
 
 // The names in `names`, comma separated.
@@ -187,8 +194,11 @@ void read_member(const YAML::Node& node, const RegistrationConfigKey& key, const
           if (!node.IsSequence() || node.size() != 3) throw file_error(file, "key '" + key.path + "' must be a list of 3 numbers");
           Eigen::Vector3d value;
           for (int i = 0; i < 3; ++i) value[i] = scalar<double>(node[i], file, key.path);
-          if (!(value.norm() > 0.0)) throw file_error(file, "key '" + key.path + "' must not be the zero vector");
-          if (std::abs(value.norm() - 1.0) > 1e-12) value.normalize();  // a unit vector is kept bit for bit
+          const double largest = value.cwiseAbs().maxCoeff();
+          if (!(largest > 0.0)) throw file_error(file, "key '" + key.path + "' must not be the zero vector");
+          // A unit vector is kept bit for bit; others are scaled by their largest entry first, so the
+          // squared norm neither overflows (1e308) nor underflows (1e-300).
+          if (std::abs(value.norm() - 1.0) > 1e-12) value = (value / largest).normalized();
           *target = value;
         } else if constexpr (std::is_same_v<T, std::vector<double>>) {
           if (!node.IsSequence() || node.size() == 0)
@@ -276,7 +286,13 @@ void collect_keys(const YAML::Node& node, const std::string& prefix, const std::
                   std::vector<std::pair<const RegistrationConfigKey*, YAML::Node>>& found) {
   if (!node.IsMap()) throw file_error(file, "'" + prefix + "' must be a mapping");
   for (const auto& entry : node) {
-    const std::string name = entry.first.as<std::string>();
+    if (!entry.first.IsScalar()) {
+      const YAML::Mark mark = entry.first.Mark();
+      throw file_error(file, (mark.is_null() ? std::string() : "line " + std::to_string(mark.line + 1) + ": ") + "a key " +
+                                 (prefix.empty() ? std::string("at the top level") : "in '" + prefix + "'") +
+                                 " is a list, a mapping or empty; keys are names");
+    }
+    const std::string name = entry.first.Scalar();
     const std::string path = prefix.empty() ? name : prefix + "." + name;
     if (const RegistrationConfigKey* key = find_registration_config_key(path)) {
       found.emplace_back(key, entry.second);

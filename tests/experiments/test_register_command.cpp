@@ -223,6 +223,31 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   EXPECT_THROW(registration_preset("hdl999"), Error);
 }
 
+// Crash reproducers of fuzz_registration_config (tests/fuzz/regressions/registration_config/): each
+// is now an Error naming the file and what was wrong, not an escaping YAML exception.
+TEST(RegistrationConfig, FuzzRegressionsGiveErrorsNamingTheFile) {
+  const auto expect_error = [](const std::string& name, const std::string& detail) {
+    const std::string path = testing::fuzz_regression_path("registration_config", name);
+    RegistrationOptions options;
+    try {
+      apply_registration_config(path, options);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find(path), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find(detail), std::string::npos) << error.what();
+    }
+  };
+  // `{up:,[0 1]}` makes a list a key: YAML::TypedBadConversion escaped from the key's as<std::string>().
+  expect_error("list_as_key.yaml", "line 1: a key in 'extraction' is a list, a mapping or empty; keys are names");
+  // -.inf was accepted, and registration_config_yaml wrote "-inf", which does not read back.
+  expect_error("epsilon_minus_inf.yaml", "key 'extraction.shapes.epsilon' must be a finite number, got '-.inf'");
+  // up: [1e308, 1e308, 0] overflowed the squared norm and was normalised to the zero vector.
+  RegistrationOptions options;
+  apply_registration_config(testing::fuzz_regression_path("registration_config", "up_norm_overflows.yaml"), options);
+  for (const ExtractionOptions* side : {&options.source_extraction, &options.target_extraction})
+    EXPECT_TRUE(side->up.isApprox(Eigen::Vector3d(1, 1, 0).normalized(), 1e-15)) << side->up.transpose();
+}
+
 TEST(RegistrationConfig, AutoPresetChoosesFromMeasuredCloudProperties) {
   // A synthetic 16-ring spinning scan and a synthetic 70-degree non-repetitive scan.
   PointCloud rings;
