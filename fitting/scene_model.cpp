@@ -119,11 +119,7 @@ void validate_scene_model(const SceneModel& model) {
 // ---------------------------------------------------------------------------------------------
 // Binary format (documented at kSceneModelBinaryVersion).
 
-namespace {
-
-constexpr char kMagic[8] = {'Q', 'D', 'X', 'S', 'C', 'E', 'N', 'E'};
-
-std::uint32_t fnv1a(const char* data, std::size_t size) {
+std::uint32_t scene_model_binary_checksum(const char* data, std::size_t size) {
   std::uint32_t hash = 2166136261u;
   for (std::size_t i = 0; i < size; ++i) {
     hash ^= static_cast<std::uint8_t>(data[i]);
@@ -131,6 +127,10 @@ std::uint32_t fnv1a(const char* data, std::size_t size) {
   }
   return hash;
 }
+
+namespace {
+
+constexpr char kMagic[8] = {'Q', 'D', 'X', 'S', 'C', 'E', 'N', 'E'};
 
 class LittleEndianWriter {
  public:
@@ -229,7 +229,7 @@ std::string scene_model_to_binary(const SceneModel& model) {
     writer.bytes(name.data(), name.size());
     writer.float64(milliseconds);
   }
-  const std::uint32_t checksum = fnv1a(writer.buffer().data(), writer.buffer().size());
+  const std::uint32_t checksum = scene_model_binary_checksum(writer.buffer().data(), writer.buffer().size());
   writer.unsigned_integer<std::uint32_t>(checksum);
   return std::move(writer.buffer());
 }
@@ -299,7 +299,7 @@ SceneModel scene_model_from_binary(const std::string& bytes, const std::string& 
   if (body.remaining() != 0)
     throw file_error(source_name, std::to_string(body.remaining()) + " unexpected bytes after the timings at offset " +
                                       std::to_string(body.position()));
-  const std::uint32_t checksum = fnv1a(bytes.data(), payload);
+  const std::uint32_t checksum = scene_model_binary_checksum(bytes.data(), payload);
   if (checksum != stored_checksum)
     throw file_error(source_name, "checksum mismatch (stored " + std::to_string(stored_checksum) + ", computed " +
                                       std::to_string(checksum) + "): the file is corrupted");

@@ -84,6 +84,9 @@ void validate_scene_model(const SceneModel& model);
 ///   u32 FNV-1a checksum of every preceding byte.
 inline constexpr std::uint32_t kSceneModelBinaryVersion = 1;
 
+/// The FNV-1a checksum the binary format stores after its payload, over `size` bytes of `data`.
+std::uint32_t scene_model_binary_checksum(const char* data, std::size_t size);
+
 /// Serialised bytes of the binary format (see kSceneModelBinaryVersion).
 std::string scene_model_to_binary(const SceneModel& model);
 /// Parses the binary format; throws quadrix::Error naming `source_name`, the field and what was
