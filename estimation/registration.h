@@ -66,7 +66,7 @@ struct AmbiguityOptions {
   double translation_disagreement = 2.0;      ///< candidates farther apart than this disagree, m (success rule: 2 m)
   double rotation_disagreement_degrees = 5.0; ///< or rotated more than this apart, degrees (success rule: 5 deg)
   std::size_t minimum_clique_for_ok = 5;      ///< a winner supported by a smaller clique is `ambiguous`: 3 or 4 mutually consistent pairs arise by chance among hundreds
-  double overlap_margin = 0.15;               ///< an `ok` answer whose dense overlap (check_overlap) is below the unmoved source's by more than this fraction is `ambiguous` (negative: no check)
+  double overlap_margin = 0.0;                ///< an `ok` answer whose dense overlap (check_overlap) is below the unmoved source's by more than this fraction is `ambiguous` (0: it must beat not moving; negative: no check)
   double minimum_overlap = 0.4;               ///< an `ok` answer must land at least this fraction of the source (above its ground) within 0.3 m of the target, else `ambiguous` (0: no floor)
 };
 

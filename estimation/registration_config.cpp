@@ -139,7 +139,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::translation_disagreement>("ambiguity.translation_disagreement", "candidates farther apart than this disagree, m"),
       shared_key<&R::ambiguity, &AmbiguityOptions::rotation_disagreement_degrees>("ambiguity.rotation_disagreement_degrees", "or rotated more than this apart, degrees"),
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_clique_for_ok>("ambiguity.minimum_clique_for_ok", "a winner supported by a smaller clique is ambiguous, correspondences"),
-      shared_key<&R::ambiguity, &AmbiguityOptions::overlap_margin>("ambiguity.overlap_margin", "an ok answer overlapping less than the unmoved source by more than this is ambiguous, fraction (negative: no check)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::overlap_margin>("ambiguity.overlap_margin", "an ok answer overlapping less than the unmoved source by more than this is ambiguous, fraction (0: it must beat not moving; negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_overlap>("ambiguity.minimum_overlap", "an ok answer landing less than this fraction of the source within 0.3 m of the target is ambiguous, fraction (0: no floor)"),
       // dense_search
       shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),

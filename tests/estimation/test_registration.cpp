@@ -237,6 +237,18 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   EXPECT_EQ(wrong.status, RegistrationStatus::Ambiguous);
   EXPECT_NE(wrong.message.find("left where it is"), std::string::npos) << wrong.message;
   EXPECT_TRUE(wrong.transform.isApprox(Eigen::Translation3d(8.0, 0.0, 0.0) * truth));  // reported, not replaced
+  // An answer only slightly worse than not moving, well above the floor, is demoted too: with the
+  // default margin of 0 an `ok` answer must put more of the source on the target than leaving it
+  // in place (the damaged 3DTK answers of docs/reliability.md were 0.005-0.035 below it).
+  RegistrationResult slightly_worse = right;
+  slightly_worse.status = RegistrationStatus::Ok;
+  slightly_worse.message = "candidate of level 0";
+  slightly_worse.transform = Eigen::Translation3d(0.3, 0.0, 0.0) * truth;  // 0.93 of the source against 0.998 unmoved
+  check_overlap(slightly_worse, source, target, AmbiguityOptions{});
+  ASSERT_LT(slightly_worse.overlap->transformed, slightly_worse.overlap->identity);
+  ASSERT_GT(slightly_worse.overlap->transformed, slightly_worse.overlap->identity - 0.15);
+  ASSERT_GT(slightly_worse.overlap->transformed, AmbiguityOptions{}.minimum_overlap);
+  EXPECT_EQ(slightly_worse.status, RegistrationStatus::Ambiguous) << slightly_worse.message;
   // The floor alone (margin switched off) demotes it too: it puts less than 40% of the source on the target.
   AmbiguityOptions floor_only;
   floor_only.overlap_margin = -1.0;

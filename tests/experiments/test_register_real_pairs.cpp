@@ -49,11 +49,14 @@ TEST(RegisterRealPairs, NonKittiPairsAreSolvedOrFlaggedNeverConfidentlyWrong) {
       EXPECT_TRUE(success) << "confident wrong answer: RTE " << translation_error(result.transform, truth) << " m, RRE "
                            << rotation_error_degrees(result.transform, truth) << " deg";
     }
-    // Measured to succeed (README "Registration" table): the HDL-32E pair and all three 3DTK pairs,
-    // `ok` and within 0.5 m, where the identity is 1.6-3.4 m off (1->0 and 2->0 are settled by the
-    // dense search along the weakest direction; the ground truth is good to 5-20 cm).
+    // Measured to succeed (docs/registration.md, results on pairs.tsv): the HDL-32E pair and all three
+    // 3DTK pairs, within 0.5 m, where the identity is 1.6-3.4 m off (the ground truth is good to
+    // 5-20 cm). Each is `ok` unless the answer lands less of the source on the target than not
+    // moving (3DTK 2->0, whose truth does: 0.69 against 0.76), which is `ambiguous` by the overlap guard.
     if (pair.id == "hdl32_local" || pair.id.rfind("3dtk", 0) == 0) {
-      EXPECT_EQ(result.status, RegistrationStatus::Ok) << result.message;
+      ASSERT_TRUE(result.overlap.has_value());
+      const bool beats_not_moving = result.overlap->transformed >= result.overlap->identity;
+      EXPECT_EQ(result.status, beats_not_moving ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous) << result.message;
       EXPECT_TRUE(success) << "RTE " << translation_error(result.transform, truth) << " m, RRE "
                            << rotation_error_degrees(result.transform, truth) << " deg";
       EXPECT_LT(translation_error(result.transform, truth), 0.5);
@@ -101,7 +104,12 @@ TEST(RegisterRealPairs, DenseSearchNeverSettlesAnAnswerWrongly) {
         EXPECT_LT(rotation_error_degrees(result.transform, truth), 2.0);  // 3DTK's approximate truth: ~1.4 deg
       } else {
         EXPECT_EQ(result.status, RegistrationStatus::Ambiguous);
-        EXPECT_GT(offset, 5.0) << "inside the grid every pair settles";
+      }
+      if (offset == 5.0) {
+        // Inside the grid every pair settles, at the truth; the overlap guard may still call the
+        // settled answer `ambiguous` where the truth lands less of the source than not moving.
+        EXPECT_TRUE(result.findings.settled_by_dense_search) << result.message;
+        EXPECT_LT(translation_error(result.transform, truth), 0.3) << result.message;
       }
     }
   }
