@@ -64,16 +64,14 @@ const std::vector<std::string>& csv_columns() {
   static const std::vector<std::string> columns{
       "task",          "pair_id",      "trial",          "method",  "difficulty",         "kind",
       "has_gt",        "status",       "success",        "rte_m",   "rre_deg",            "yaw_deg",
-      "shift_x_m",     "shift_y_m",    "seed",           "correspondences", "inliers",   "recalled",
-      "source_model_bytes", "target_model_bytes", "overlap", "identity_overlap", "timings_ms", "message"};
+      "tilt_deg",      "shift_x_m",    "shift_y_m",      "seed",    "correspondences",    "inliers",
+      "recalled",      "source_model_bytes", "target_model_bytes", "overlap", "identity_overlap", "timings_ms", "message"};
   return columns;
 }
 
-// The columns of files written before "overlap" and "identity_overlap" were added.
-std::vector<std::string> columns_without_overlap() {
-  std::vector<std::string> columns = csv_columns();
-  columns.erase(std::find(columns.begin(), columns.end(), "overlap"), std::find(columns.begin(), columns.end(), "timings_ms"));
-  return columns;
+// Columns added after the first files were written; older files without them still read (value 0).
+bool is_later_column(const std::string& name) {
+  return name == "overlap" || name == "identity_overlap" || name == "tilt_deg";
 }
 
 std::string timings_text(const std::map<std::string, double>& timings) {
@@ -335,7 +333,7 @@ void write_bench_rows_csv(const std::string& path, const std::vector<BenchRow>& 
           << csv_field(r.difficulty) << "," << csv_field(r.kind) << "," << (r.has_ground_truth ? 1 : 0) << ","
           << csv_field(r.status) << "," << (r.has_ground_truth ? (r.success ? "1" : "0") : "") << ","
           << (r.has_ground_truth ? exact(r.rte) : "") << "," << (r.has_ground_truth ? exact(r.rre) : "") << ","
-          << exact(r.yaw_degrees) << "," << exact(r.shift_x) << "," << exact(r.shift_y) << "," << r.seed << ","
+          << exact(r.yaw_degrees) << "," << exact(r.tilt_degrees) << "," << exact(r.shift_x) << "," << exact(r.shift_y) << "," << r.seed << ","
           << r.correspondences << "," << r.inliers << "," << r.recalled << "," << r.source_model_bytes << ","
           << r.target_model_bytes << "," << exact(r.overlap) << "," << exact(r.identity_overlap) << ","
           << csv_field(timings_text(r.timings_ms)) << "," << csv_field(r.message) << "\n";
@@ -349,70 +347,74 @@ std::vector<BenchRow> read_bench_rows_csv(const std::string& path) {
   std::string line;
   std::size_t line_number = 0;
   std::vector<BenchRow> rows;
-  std::vector<std::string> columns = csv_columns();
-  bool has_overlap = true;
+  std::vector<std::string> columns;             // the file's header
+  std::map<std::string, std::size_t> index_of;  // column name -> field index in this file
   while (std::getline(file, line)) {
     ++line_number;
     const std::string where = path + ":" + std::to_string(line_number);
     const std::vector<std::string> fields = parse_csv_fields(line);
     if (line_number == 1) {
-      has_overlap = fields == columns;
-      if (!has_overlap) columns = columns_without_overlap();
-      if (fields != columns) throw Error(where + ": header is not the benchmark row header (" + columns.front() + ",...)");
+      // Columns are found by name: every current column must be there, except the later ones.
+      columns = fields;
+      for (std::size_t c = 0; c < fields.size(); ++c)
+        if (!index_of.emplace(fields[c], c).second) throw Error(where + ": column " + fields[c] + " appears twice in the header");
+      for (const std::string& name : csv_columns())
+        if (!index_of.count(name) && !is_later_column(name))
+          throw Error(where + ": header is not the benchmark row header (" + csv_columns().front() + ",...): no column " + name);
       continue;
     }
     if (line.empty()) continue;
     if (fields.size() != columns.size())
       throw Error(where + ": " + std::to_string(fields.size()) + " fields, expected " + std::to_string(columns.size()));
-    const auto number = [&](std::size_t c) {
+    const auto field = [&](const std::string& name) -> const std::string& { return fields[index_of.at(name)]; };
+    const auto number = [&](const std::string& name, double absent) {
+      if (!index_of.count(name)) return absent;
       try {
         std::size_t used = 0;
-        const double value = std::stod(fields[c], &used);
-        if (used != fields[c].size()) throw std::invalid_argument(fields[c]);
+        const double value = std::stod(field(name), &used);
+        if (used != field(name).size()) throw std::invalid_argument(field(name));
         return value;
       } catch (const std::exception&) {
-        throw Error(where + ": column " + columns[c] + " '" + fields[c] + "' is not a number");
+        throw Error(where + ": column " + name + " '" + field(name) + "' is not a number");
       }
     };
-    const auto integer = [&](std::size_t c) {
+    const auto integer = [&](const std::string& name) {
       try {
         std::size_t used = 0;
-        const long long value = std::stoll(fields[c], &used);
-        if (used != fields[c].size()) throw std::invalid_argument(fields[c]);
+        const long long value = std::stoll(field(name), &used);
+        if (used != field(name).size()) throw std::invalid_argument(field(name));
         return value;
       } catch (const std::exception&) {
-        throw Error(where + ": column " + columns[c] + " '" + fields[c] + "' is not an integer");
+        throw Error(where + ": column " + name + " '" + field(name) + "' is not an integer");
       }
     };
     BenchRow r;
-    r.task = static_cast<std::size_t>(integer(0));
-    r.pair_id = fields[1];
-    r.trial = static_cast<int>(integer(2));
-    r.method = fields[3];
-    r.difficulty = fields[4];
-    r.kind = fields[5];
-    r.has_ground_truth = integer(6) != 0;
-    r.status = fields[7];
+    r.task = static_cast<std::size_t>(integer("task"));
+    r.pair_id = field("pair_id");
+    r.trial = static_cast<int>(integer("trial"));
+    r.method = field("method");
+    r.difficulty = field("difficulty");
+    r.kind = field("kind");
+    r.has_ground_truth = integer("has_gt") != 0;
+    r.status = field("status");
     if (r.has_ground_truth) {
-      r.success = integer(8) != 0;
-      r.rte = number(9);
-      r.rre = number(10);
+      r.success = integer("success") != 0;
+      r.rte = number("rte_m", 0.0);
+      r.rre = number("rre_deg", 0.0);
     }
-    r.yaw_degrees = number(11);
-    r.shift_x = number(12);
-    r.shift_y = number(13);
-    r.seed = static_cast<std::uint64_t>(std::stoull(fields[14]));
-    r.correspondences = integer(15);
-    r.inliers = integer(16);
-    r.recalled = static_cast<int>(integer(17));
-    r.source_model_bytes = integer(18);
-    r.target_model_bytes = integer(19);
-    const std::size_t after_bytes = has_overlap ? 22 : 20;  // index of timings_ms
-    if (has_overlap) {
-      r.overlap = number(20);
-      r.identity_overlap = number(21);
-    }
-    std::istringstream timings(fields[after_bytes]);
+    r.yaw_degrees = number("yaw_deg", 0.0);
+    r.tilt_degrees = number("tilt_deg", 0.0);
+    r.shift_x = number("shift_x_m", 0.0);
+    r.shift_y = number("shift_y_m", 0.0);
+    r.seed = static_cast<std::uint64_t>(integer("seed"));
+    r.correspondences = integer("correspondences");
+    r.inliers = integer("inliers");
+    r.recalled = static_cast<int>(integer("recalled"));
+    r.source_model_bytes = integer("source_model_bytes");
+    r.target_model_bytes = integer("target_model_bytes");
+    r.overlap = number("overlap", -1.0);
+    r.identity_overlap = number("identity_overlap", -1.0);
+    std::istringstream timings(field("timings_ms"));
     for (std::string entry; std::getline(timings, entry, ';');) {
       const auto equals = entry.find('=');
       if (equals == std::string::npos) throw Error(where + ": timings entry '" + entry + "' is not name=ms");
@@ -422,7 +424,7 @@ std::vector<BenchRow> read_bench_rows_csv(const std::string& path) {
         throw Error(where + ": timings entry '" + entry + "' is not name=ms");
       }
     }
-    r.message = fields[after_bytes + 1];
+    r.message = field("message");
     rows.push_back(std::move(r));
   }
   if (line_number == 0) throw file_error(path, "empty file (expected the benchmark row header)");

@@ -119,9 +119,17 @@ struct Task {
   int trial = 0;
 };
 
+// Whether trials move the source at all (else each pair runs as given).
+bool perturbs(const BenchOptions& options) {
+  return options.yaw_range_degrees > 0.0 || options.translation_range > 0.0 || options.tilt_range_degrees > 0.0;
+}
+
+// The trial's motion of the source: a tilt about a random horizontal axis through the sensor (uniform
+// angle in [0, tilt range]) after a yaw about the up axis, then a horizontal shift. The yaw and shift
+// are drawn first, so a run without tilt draws exactly what it drew before tilt existed.
 Eigen::Isometry3d perturbation_of(const BenchOptions& options, std::uint64_t seed) {
   Eigen::Isometry3d perturbation = Eigen::Isometry3d::Identity();
-  if (options.yaw_range_degrees <= 0.0 && options.translation_range <= 0.0) return perturbation;
+  if (!perturbs(options)) return perturbation;
   std::mt19937_64 random(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   const double yaw = options.yaw_range_degrees * unit(random);
@@ -135,7 +143,14 @@ Eigen::Isometry3d perturbation_of(const BenchOptions& options, std::uint64_t see
     x *= options.translation_range;
     y *= options.translation_range;
   }
-  perturbation.linear() = Eigen::AngleAxisd(yaw * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  Eigen::Matrix3d tilt = Eigen::Matrix3d::Identity();
+  if (options.tilt_range_degrees > 0.0) {
+    const double axis_heading = M_PI * unit(random);
+    const double angle = options.tilt_range_degrees * 0.5 * (unit(random) + 1.0);
+    const Eigen::Vector3d axis(std::cos(axis_heading), std::sin(axis_heading), 0.0);
+    tilt = Eigen::AngleAxisd(angle * M_PI / 180.0, axis).toRotationMatrix();
+  }
+  perturbation.linear() = tilt * Eigen::AngleAxisd(yaw * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   perturbation.translation() = Eigen::Vector3d(x, y, 0.0);
   return perturbation;
 }
@@ -186,10 +201,14 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
                               std::uint64_t seed, BenchRow& row) {
   const BenchPair& pair = *input.pair;
   const std::string& corruption = context.options->corruption;
-  const std::string source_key = corruption.empty() ? pair.source : pair.source + "|" + corruption + "|" + std::to_string(seed);
-  const RegistrationOptions registration =
-      context.options_for(context.options_of(source_key, unmoved_source), context.options_of(pair.target, *input.target));
-  const bool perturbed = context.options->yaw_range_degrees > 0.0 || context.options->translation_range > 0.0;
+  // A tilted source is resolved as given, tilted (auto measures its up axis, as `quadrix register`
+  // would on a tilted scan); otherwise on the unmoved source, whose up axis the yaw leaves alone.
+  const bool tilted = context.options->tilt_range_degrees > 0.0;
+  std::string source_key = corruption.empty() ? pair.source : pair.source + "|" + corruption + "|" + std::to_string(seed);
+  if (tilted) source_key += "|tilted|" + std::to_string(seed);
+  const RegistrationOptions registration = context.options_for(
+      context.options_of(source_key, tilted ? *input.source : unmoved_source), context.options_of(pair.target, *input.target));
+  const bool perturbed = perturbs(*context.options);
   const bool own_source_model = perturbed || !context.options->corruption.empty();  // not the cached one
   const auto build = [](const PointCloud& cloud, const ExtractionOptions& extraction, const ModellingOptions& modelling) {
     CachedModel cached;
@@ -203,7 +222,7 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
     // The perturbed sensor sits at the perturbation's origin with its up axis rotated: tell extraction.
     ExtractionOptions extraction = registration.source_extraction;
     extraction.sensor_origin = input.perturbation * extraction.sensor_origin;
-    extraction.up = input.perturbation.linear() * extraction.up;
+    if (!tilted) extraction.up = input.perturbation.linear() * extraction.up;
     source_model = std::make_shared<const CachedModel>(build(*input.source, extraction, registration.modelling));
   } else {
     source_model = context.models.get(model_key(pair.source, "source"), [&] {
@@ -265,7 +284,7 @@ std::vector<BenchRow> run_task(RunContext& context, const Task& task) {
       context.clouds.get(pair.target, [&] { return read_point_cloud(pair.target); });
   const std::uint64_t seed = options.seed * 1000003ULL + task.index;
   const Eigen::Isometry3d perturbation = perturbation_of(options, seed);
-  const bool perturbed = options.yaw_range_degrees > 0.0 || options.translation_range > 0.0;
+  const bool perturbed = perturbs(options);
   const Corruption corruption = parse_corruption(options.corruption);
   // The source is damaged in its own frame (the sensor at the origin), then moved.
   const PointCloud corrupted_source =
@@ -290,6 +309,8 @@ std::vector<BenchRow> run_task(RunContext& context, const Task& task) {
     row.has_ground_truth = pair.ground_truth.has_value();
     row.seed = seed;
     row.yaw_degrees = std::atan2(perturbation.linear()(1, 0), perturbation.linear()(0, 0)) * 180.0 / M_PI;
+    row.tilt_degrees =
+        std::acos(std::clamp((perturbation.linear() * Eigen::Vector3d::UnitZ()).z(), -1.0, 1.0)) * 180.0 / M_PI;
     row.shift_x = perturbation.translation().x();
     row.shift_y = perturbation.translation().y();
     BenchMethodOutput output;
@@ -440,6 +461,8 @@ std::vector<BenchRow> run_benchmark(const std::vector<BenchPair>& pairs, const B
     throw Error("--shard " + std::to_string(options.shard_index) + "/" + std::to_string(options.shard_count) +
                 ": expected i/n with 1 <= i <= n");
   if (options.jobs < 1) throw Error("--jobs must be at least 1, got " + std::to_string(options.jobs));
+  if (!(options.tilt_range_degrees >= 0.0 && options.tilt_range_degrees <= 90.0))
+    throw Error("--tilt must be an angle in [0, 90] degrees, got " + std::to_string(options.tilt_range_degrees));
   if (options.preset != "auto") registration_preset(options.preset);  // unknown names are an Error listing them
   if (!options.config.empty()) {
     RegistrationOptions probe;
@@ -454,7 +477,7 @@ std::vector<BenchRow> run_benchmark(const std::vector<BenchPair>& pairs, const B
   context.pairs = &pairs;
   context.options = &options;
   std::vector<Task> tasks;
-  const bool perturbing = options.yaw_range_degrees > 0.0 || options.translation_range > 0.0;
+  const bool perturbing = perturbs(options);
   const bool quadrix_runs = std::find(options.methods.begin(), options.methods.end(), "quadrix") != options.methods.end();
   for (std::size_t p = 0; p < pairs.size(); ++p)
     for (int trial = 0; trial < options.trials; ++trial) {

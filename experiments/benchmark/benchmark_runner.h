@@ -51,6 +51,7 @@ struct BenchOptions {
   std::string ablation;                         ///< bench_ablation_names() entry, or "" for the defaults
   double yaw_range_degrees = 0.0;               ///< trials rotate the source by a yaw uniform in [-range, range] about the up axis
   double translation_range = 0.0;               ///< and translate it uniformly within a horizontal disc of this radius, m
+  double tilt_range_degrees = 0.0;              ///< and tilt it about a random horizontal axis through the sensor by up to this angle (auto then finds the up axis itself)
   std::string corruption;                       ///< fault injected into every source cloud (parse_corruption name; "" none)
   int trials = 1;                               ///< random perturbations per pair (1 with both ranges 0: the pair as given)
   std::uint64_t seed = 1;                       ///< seed of the perturbations; task k uses seed * 1000003 + k (recorded per row)
@@ -75,6 +76,7 @@ struct BenchRow {
   double rte = 0.0;                ///< RTE, m (0 without ground truth)
   double rre = 0.0;                ///< RRE, degrees (0 without ground truth)
   double yaw_degrees = 0.0;        ///< yaw applied to the source in this trial
+  double tilt_degrees = 0.0;       ///< angle between the source's up axis before and after the perturbation
   double shift_x = 0.0;            ///< x translation applied to the source, m
   double shift_y = 0.0;            ///< y translation applied to the source, m
   std::uint64_t seed = 0;          ///< seed of this task's perturbation

@@ -180,6 +180,7 @@ void run(BenchCommandOptions& options) {
   if (!bench.ablation.empty()) options_text << " --ablation " << bench.ablation;
   if (!bench.corruption.empty()) options_text << " --corrupt " << bench.corruption;
   options_text << " --yaw-range " << bench.yaw_range_degrees << " --translation-range " << bench.translation_range
+               << " --tilt " << bench.tilt_range_degrees
                << " --trials " << bench.trials << " --seed " << bench.seed << " --baseline-voxel " << bench.baseline.voxel_size;
   BenchRunInfo info;
   info.title = options.title.empty() ? "quadrix bench" + std::string(bench.ablation.empty() ? "" : " (ablation " + bench.ablation + ")")
@@ -241,6 +242,9 @@ const CommandRegistration registration(70, [](CLI::App& app) {
                       "Random yaw of the source about the up axis, uniform in [-DEG, DEG]")->capture_default_str();
   command->add_option("--translation-range", options->bench.translation_range,
                       "Random horizontal translation of the source, uniform in a disc of this radius, m")->capture_default_str();
+  command->add_option("--tilt", options->bench.tilt_range_degrees,
+                      "Random tilt of the source about a horizontal axis through the sensor, uniform in [0, DEG]; "
+                      "auto then measures the tilted cloud's up axis")->capture_default_str();
   std::string corruptions;
   for (const auto& name : standard_corruption_names()) corruptions += (corruptions.empty() ? "" : ", ") + name;
   command->add_option("--corrupt", options->bench.corruption,
