@@ -38,14 +38,21 @@ bool is_packed_color(const PcdField& field) {
   return (field.name == "rgb" || field.name == "rgba") && field.size == 4 && field.count == 1;
 }
 
-PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
-  PcdHeader header;
+/// The header as written, before SIZE, TYPE and COUNT can be checked against FIELDS.
+struct PcdHeaderLines {
+  PcdHeader header;  // field names, WIDTH, HEIGHT, POINTS, DATA and where the body starts
+  std::vector<std::string> size_text, type_text, count_text;
+  bool have_fields = false, have_width = false, have_height = false;
+};
+
+/// Reads the key lines up to DATA; SIZE, TYPE and COUNT stay text, since FIELDS may come after them.
+PcdHeaderLines read_pcd_header_lines(const std::string& path, std::string_view text) {
+  PcdHeaderLines result;
+  PcdHeader& header = result.header;
   LineReader lines(text);
   std::string_view line;
   std::vector<std::string_view> tokens;
-  std::vector<std::string_view> sizes, types, counts;
-  std::vector<std::string> size_text, type_text, count_text;
-  bool have_fields = false, have_width = false, have_height = false, any_key = false;
+  bool any_key = false;
   while (true) {
     if (!lines.next(line)) {
       if (!any_key) throw file_error(path, "bad magic: not a PCD file (no FIELDS/DATA header)");
@@ -62,24 +69,24 @@ PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
     if (key == "VERSION") {
       any_key = true;
     } else if (key == "FIELDS" || key == "COLUMNS") {
-      any_key = have_fields = true;
+      any_key = result.have_fields = true;
       for (std::size_t k = 1; k < tokens.size(); ++k) {
         PcdField field;
         field.name = std::string(tokens[k]);
         header.fields.push_back(field);
       }
     } else if (key == "SIZE") {
-      for (std::size_t k = 1; k < tokens.size(); ++k) size_text.emplace_back(tokens[k]);
+      for (std::size_t k = 1; k < tokens.size(); ++k) result.size_text.emplace_back(tokens[k]);
     } else if (key == "TYPE") {
-      for (std::size_t k = 1; k < tokens.size(); ++k) type_text.emplace_back(tokens[k]);
+      for (std::size_t k = 1; k < tokens.size(); ++k) result.type_text.emplace_back(tokens[k]);
     } else if (key == "COUNT") {
-      for (std::size_t k = 1; k < tokens.size(); ++k) count_text.emplace_back(tokens[k]);
+      for (std::size_t k = 1; k < tokens.size(); ++k) result.count_text.emplace_back(tokens[k]);
     } else if (key == "WIDTH") {
       single_size(header.width);
-      have_width = true;
+      result.have_width = true;
     } else if (key == "HEIGHT") {
       single_size(header.height);
-      have_height = true;
+      result.have_height = true;
     } else if (key == "POINTS") {
       single_size(header.points);
       header.have_points = true;
@@ -94,63 +101,92 @@ PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
       throw file_error(path, where + "unknown PCD header key '" + key + "'");
     }
   }
-  if (!have_fields || header.fields.empty()) throw file_error(path, "PCD header has no FIELDS line");
-  const std::size_t n = header.fields.size();
-  if (size_text.size() != n)
-    throw file_error(path, "PCD header: SIZE has " + std::to_string(size_text.size()) + " entries for " +
+  header.body_offset = lines.position();
+  header.body_first_line = lines.line_number() + 1;
+  return result;
+}
+
+/// Checks that FIELDS exists and that SIZE, TYPE and (when given) COUNT have one entry per field.
+void check_pcd_field_lists(const std::string& path, const PcdHeaderLines& lines) {
+  if (!lines.have_fields || lines.header.fields.empty()) throw file_error(path, "PCD header has no FIELDS line");
+  const std::size_t n = lines.header.fields.size();
+  if (lines.size_text.size() != n)
+    throw file_error(path, "PCD header: SIZE has " + std::to_string(lines.size_text.size()) + " entries for " +
                                std::to_string(n) + " FIELDS");
-  if (type_text.size() != n)
-    throw file_error(path, "PCD header: TYPE has " + std::to_string(type_text.size()) + " entries for " +
+  if (lines.type_text.size() != n)
+    throw file_error(path, "PCD header: TYPE has " + std::to_string(lines.type_text.size()) + " entries for " +
                                std::to_string(n) + " FIELDS");
-  if (!count_text.empty() && count_text.size() != n)
-    throw file_error(path, "PCD header: COUNT has " + std::to_string(count_text.size()) + " entries for " +
+  if (!lines.count_text.empty() && lines.count_text.size() != n)
+    throw file_error(path, "PCD header: COUNT has " + std::to_string(lines.count_text.size()) + " entries for " +
                                std::to_string(n) + " FIELDS");
+}
+
+/// The scalar type of a field's TYPE letter and SIZE, or an error naming both as the file spells them.
+ScalarType pcd_scalar_type(const std::string& path, const PcdField& field, const std::string& type_text,
+                           const std::string& size_text) {
+  const std::string kind = std::string(1, field.type) + std::to_string(field.size);
+  if (kind == "I1") return ScalarType::Int8;
+  if (kind == "U1") return ScalarType::UInt8;
+  if (kind == "I2") return ScalarType::Int16;
+  if (kind == "U2") return ScalarType::UInt16;
+  if (kind == "I4") return ScalarType::Int32;
+  if (kind == "U4") return ScalarType::UInt32;
+  if (kind == "I8") return ScalarType::Int64;
+  if (kind == "U8") return ScalarType::UInt64;
+  if (kind == "F4") return ScalarType::Float32;
+  if (kind == "F8") return ScalarType::Float64;
+  throw file_error(path, "PCD header: field '" + field.name + "' has unsupported TYPE " + type_text + " SIZE " + size_text +
+                             " (expected I/U of size 1, 2, 4, 8 or F of size 4, 8)");
+}
+
+/// Gives each field its size, type, count and byte offset (values a point capped first); returns the record size.
+std::size_t lay_out_pcd_fields(const std::string& path, PcdHeaderLines& lines) {
   std::size_t offset = 0;
   std::size_t values_per_point = 0;
-  for (std::size_t f = 0; f < n; ++f) {
-    PcdField& field = header.fields[f];
-    if (!parse_size(size_text[f], field.size))
-      throw file_error(path, "PCD header: SIZE of field '" + field.name + "' is '" + size_text[f] + "'");
-    if (type_text[f].size() != 1)
-      throw file_error(path, "PCD header: TYPE of field '" + field.name + "' is '" + type_text[f] + "' (expected I, U or F)");
-    field.type = type_text[f][0];
-    if (!count_text.empty() && (!parse_size(count_text[f], field.count) || field.count == 0))
-      throw file_error(path, "PCD header: COUNT of field '" + field.name + "' is '" + count_text[f] +
+  for (std::size_t f = 0; f < lines.header.fields.size(); ++f) {
+    PcdField& field = lines.header.fields[f];
+    const std::string& size_text = lines.size_text[f];
+    const std::string& type_text = lines.type_text[f];
+    if (!parse_size(size_text, field.size))
+      throw file_error(path, "PCD header: SIZE of field '" + field.name + "' is '" + size_text + "'");
+    if (type_text.size() != 1)
+      throw file_error(path, "PCD header: TYPE of field '" + field.name + "' is '" + type_text + "' (expected I, U or F)");
+    field.type = type_text[0];
+    if (!lines.count_text.empty() && (!parse_size(lines.count_text[f], field.count) || field.count == 0))
+      throw file_error(path, "PCD header: COUNT of field '" + field.name + "' is '" + lines.count_text[f] +
                                  "' (expected a positive integer)");
     values_per_point += field.count;
     if (field.count > kMaxValuesPerPoint || values_per_point > kMaxValuesPerPoint)
-      throw file_error(path, "PCD header: COUNT of field '" + field.name + "' is " + count_text[f] +
+      throw file_error(path, "PCD header: COUNT of field '" + field.name + "' is " + lines.count_text[f] +
                                  ", more than the " + std::to_string(kMaxValuesPerPoint) +
                                  " values a point this reader supports");
-    const std::string kind = std::string(1, field.type) + std::to_string(field.size);
-    if (kind == "I1") field.scalar = ScalarType::Int8;
-    else if (kind == "U1") field.scalar = ScalarType::UInt8;
-    else if (kind == "I2") field.scalar = ScalarType::Int16;
-    else if (kind == "U2") field.scalar = ScalarType::UInt16;
-    else if (kind == "I4") field.scalar = ScalarType::Int32;
-    else if (kind == "U4") field.scalar = ScalarType::UInt32;
-    else if (kind == "I8") field.scalar = ScalarType::Int64;
-    else if (kind == "U8") field.scalar = ScalarType::UInt64;
-    else if (kind == "F4") field.scalar = ScalarType::Float32;
-    else if (kind == "F8") field.scalar = ScalarType::Float64;
-    else
-      throw file_error(path, "PCD header: field '" + field.name + "' has unsupported TYPE " + type_text[f] + " SIZE " +
-                                 size_text[f] + " (expected I/U of size 1, 2, 4, 8 or F of size 4, 8)");
+    field.scalar = pcd_scalar_type(path, field, type_text, size_text);
     field.offset = offset;
     offset += field.size * field.count;
   }
-  header.point_stride = offset;
-  if (!have_width) throw file_error(path, "PCD header has no WIDTH line");
-  if (!have_height) header.height = 1;
+  return offset;
+}
+
+/// Checks WIDTH x HEIGHT against POINTS: HEIGHT defaults to 1 and POINTS to WIDTH x HEIGHT.
+void check_pcd_dimensions(const std::string& path, PcdHeaderLines& lines) {
+  PcdHeader& header = lines.header;
+  if (!lines.have_width) throw file_error(path, "PCD header has no WIDTH line");
+  if (!lines.have_height) header.height = 1;
   if (header.height != 0 && header.width > std::numeric_limits<std::size_t>::max() / header.height)
     throw file_error(path, "PCD header: WIDTH x HEIGHT overflows");
   if (!header.have_points) header.points = header.width * header.height;
   if (header.points != header.width * header.height)
     throw file_error(path, "PCD header: POINTS " + std::to_string(header.points) + " differs from WIDTH x HEIGHT = " +
                                std::to_string(header.width * header.height));
-  header.body_offset = lines.position();
-  header.body_first_line = lines.line_number() + 1;
-  return header;
+}
+
+/// Reads and checks a PCD header: its fields laid out, its dimensions consistent, the body located.
+PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
+  PcdHeaderLines lines = read_pcd_header_lines(path, text);
+  check_pcd_field_lists(path, lines);
+  lines.header.point_stride = lay_out_pcd_fields(path, lines);
+  check_pcd_dimensions(path, lines);
+  return std::move(lines.header);
 }
 
 // Output columns for one PCD field: one column a COUNT element, or red/green/blue for packed colours.
