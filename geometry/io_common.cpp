@@ -150,47 +150,62 @@ void throw_non_finite(const std::string& path, std::size_t point_index, const ch
                              " coordinate (NaN or inf) and reject_non_finite is set");
 }
 
-PointCloud assemble_cloud(const std::string& path, std::vector<FieldColumn>& columns, std::size_t rows,
-                          const CloudReadOptions& options, CloudReadReport& report) {
-  const FieldColumn* role_column[8] = {};
+namespace {
+
+/// The columns that fill the cloud's named fields, indexed by Role, and the rest as extra fields.
+struct ColumnRoles {
+  const FieldColumn* by_role[8] = {};
   std::vector<const FieldColumn*> extras;
+  bool has_colors = false;
+};
+
+/// Gives each column its role by name (first of a role wins); colours only when red, green and blue all exist.
+ColumnRoles assign_column_roles(const std::string& path, const std::vector<FieldColumn>& columns, std::size_t rows) {
+  ColumnRoles roles;
   for (const FieldColumn& column : columns) {
     if (column.values.size() != rows)
       throw Error("internal: column '" + column.name + "' of " + path + " has " + std::to_string(column.values.size()) +
                   " values for " + std::to_string(rows) + " records");
     const Role role = role_of(column.name);
     const int slot = static_cast<int>(role);
-    if (role != Role::Extra && role_column[slot] == nullptr) {
-      role_column[slot] = &column;
+    if (role != Role::Extra && roles.by_role[slot] == nullptr) {
+      roles.by_role[slot] = &column;
     } else {
-      extras.push_back(&column);
+      roles.extras.push_back(&column);
     }
   }
+  roles.has_colors = roles.by_role[static_cast<int>(Role::Red)] && roles.by_role[static_cast<int>(Role::Green)] &&
+                     roles.by_role[static_cast<int>(Role::Blue)];
+  if (!roles.has_colors) {
+    for (Role role : {Role::Red, Role::Green, Role::Blue}) {
+      if (roles.by_role[static_cast<int>(role)]) roles.extras.push_back(roles.by_role[static_cast<int>(role)]);
+      roles.by_role[static_cast<int>(role)] = nullptr;
+    }
+  }
+  return roles;
+}
+
+/// Refuses a file without x, y or z, listing the fields it does have.
+void require_xyz_columns(const std::string& path, const std::vector<FieldColumn>& columns, const ColumnRoles& roles) {
   const char* axis_names[3] = {"x", "y", "z"};
   for (int axis = 0; axis < 3; ++axis) {
-    if (role_column[axis] == nullptr) {
+    if (roles.by_role[axis] == nullptr) {
       std::string present;
       for (const FieldColumn& column : columns) present += (present.empty() ? "" : " ") + column.name;
       throw file_error(path, std::string("no '") + axis_names[axis] + "' field (fields: " +
                                  (present.empty() ? "none" : present) + "); x, y and z are required");
     }
   }
-  // Colours need all three channels; otherwise the channels present are ordinary extra fields.
-  const bool has_colors = role_column[static_cast<int>(Role::Red)] && role_column[static_cast<int>(Role::Green)] &&
-                          role_column[static_cast<int>(Role::Blue)];
-  if (!has_colors) {
-    for (Role role : {Role::Red, Role::Green, Role::Blue}) {
-      if (role_column[static_cast<int>(role)]) extras.push_back(role_column[static_cast<int>(role)]);
-      role_column[static_cast<int>(role)] = nullptr;
-    }
-  }
+}
 
-  const double* x = role_column[0]->values.data();
-  const double* y = role_column[1]->values.data();
-  const double* z = role_column[2]->values.data();
+/// Copies the finite positions (or throws under reject_non_finite); returns the rows kept, which other fields follow.
+std::vector<std::size_t> copy_finite_positions(const std::string& path, const ColumnRoles& roles, std::size_t rows,
+                                               const CloudReadOptions& options, PointCloud& cloud) {
+  const double* x = roles.by_role[0]->values.data();
+  const double* y = roles.by_role[1]->values.data();
+  const double* z = roles.by_role[2]->values.data();
   std::vector<std::size_t> kept;
   kept.reserve(rows);
-  PointCloud cloud;
   cloud.positions.resize(3, static_cast<Eigen::Index>(rows));
   float* out = cloud.positions.data();
   std::size_t count = 0;
@@ -207,48 +222,64 @@ PointCloud assemble_cloud(const std::string& path, std::vector<FieldColumn>& col
     }
   }
   if (count != rows) cloud.positions.conservativeResize(3, static_cast<Eigen::Index>(count));
-  report.points_in_file = rows;
-  report.non_finite_dropped = rows - count;
+  return kept;
+}
 
-  if (const FieldColumn* column = role_column[static_cast<int>(Role::Intensity)]) {
-    cloud.intensity.resize(count);
-    for (std::size_t k = 0; k < count; ++k) cloud.intensity[k] = static_cast<float>(column->values[kept[k]]);
+/// Copies the kept rows' labels, which must be integers that fit 32 bits.
+void copy_labels(const std::string& path, const FieldColumn& column, const std::vector<std::size_t>& kept,
+                 PointCloud& cloud) {
+  cloud.labels.resize(kept.size());
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const double value = column.values[kept[k]];
+    if (!(value >= 0.0 && value <= 4294967295.0 && value == std::floor(value)))
+      throw file_error(path, "field '" + column.name + "' of point " + std::to_string(kept[k]) + " is " +
+                                 std::to_string(value) + "; labels must be integers in 0..4294967295");
+    cloud.labels[k] = static_cast<std::uint32_t>(value);
   }
-  if (const FieldColumn* column = role_column[static_cast<int>(Role::Label)]) {
-    cloud.labels.resize(count);
-    for (std::size_t k = 0; k < count; ++k) {
-      const double value = column->values[kept[k]];
-      if (!(value >= 0.0 && value <= 4294967295.0 && value == std::floor(value)))
-        throw file_error(path, "field '" + column->name + "' of point " + std::to_string(kept[k]) + " is " +
-                                   std::to_string(value) + "; labels must be integers in 0..4294967295");
-      cloud.labels[k] = static_cast<std::uint32_t>(value);
+}
+
+/// Copies the kept rows' colours; floating-point channels that all stay within 0..1 are scaled to 0..255.
+void copy_colors(const ColumnRoles& roles, const std::vector<std::size_t>& kept, PointCloud& cloud) {
+  const std::size_t count = kept.size();
+  const FieldColumn* channels[3] = {roles.by_role[static_cast<int>(Role::Red)], roles.by_role[static_cast<int>(Role::Green)],
+                                    roles.by_role[static_cast<int>(Role::Blue)]};
+  bool scale[3];
+  for (int c = 0; c < 3; ++c) {
+    scale[c] = false;
+    if (channels[c]->floating_point) {
+      scale[c] = true;
+      for (std::size_t k = 0; k < count && scale[c]; ++k)
+        if (channels[c]->values[kept[k]] > 1.0) scale[c] = false;
     }
   }
-  if (has_colors) {
-    const FieldColumn* channels[3] = {role_column[static_cast<int>(Role::Red)],
-                                      role_column[static_cast<int>(Role::Green)],
-                                      role_column[static_cast<int>(Role::Blue)]};
-    bool scale[3];
-    for (int c = 0; c < 3; ++c) {
-      scale[c] = false;
-      if (channels[c]->floating_point) {
-        scale[c] = true;
-        for (std::size_t k = 0; k < count && scale[c]; ++k)
-          if (channels[c]->values[kept[k]] > 1.0) scale[c] = false;
-      }
-    }
-    const bool scale_all = scale[0] && scale[1] && scale[2];
-    cloud.colors.resize(count);
-    for (std::size_t k = 0; k < count; ++k)
-      for (int c = 0; c < 3; ++c) cloud.colors[k][c] = to_color_channel(channels[c]->values[kept[k]], scale_all);
-  }
-  if (options.keep_extra_fields) {
-    for (const FieldColumn* column : extras) {
-      std::vector<float>& values = cloud.extra_fields[column->name];
-      values.resize(count);
-      for (std::size_t k = 0; k < count; ++k) values[k] = static_cast<float>(column->values[kept[k]]);
-    }
-  }
+  const bool scale_all = scale[0] && scale[1] && scale[2];
+  cloud.colors.resize(count);
+  for (std::size_t k = 0; k < count; ++k)
+    for (int c = 0; c < 3; ++c) cloud.colors[k][c] = to_color_channel(channels[c]->values[kept[k]], scale_all);
+}
+
+/// The kept rows of one column as floats (intensity and extra fields).
+std::vector<float> kept_values(const FieldColumn& column, const std::vector<std::size_t>& kept) {
+  std::vector<float> values(kept.size());
+  for (std::size_t k = 0; k < kept.size(); ++k) values[k] = static_cast<float>(column.values[kept[k]]);
+  return values;
+}
+
+}  // namespace
+
+PointCloud assemble_cloud(const std::string& path, std::vector<FieldColumn>& columns, std::size_t rows,
+                          const CloudReadOptions& options, CloudReadReport& report) {
+  const ColumnRoles roles = assign_column_roles(path, columns, rows);
+  require_xyz_columns(path, columns, roles);
+  PointCloud cloud;
+  const std::vector<std::size_t> kept = copy_finite_positions(path, roles, rows, options, cloud);
+  report.points_in_file = rows;
+  report.non_finite_dropped = rows - kept.size();
+  if (const FieldColumn* column = roles.by_role[static_cast<int>(Role::Intensity)]) cloud.intensity = kept_values(*column, kept);
+  if (const FieldColumn* column = roles.by_role[static_cast<int>(Role::Label)]) copy_labels(path, *column, kept, cloud);
+  if (roles.has_colors) copy_colors(roles, kept, cloud);
+  if (options.keep_extra_fields)
+    for (const FieldColumn* column : roles.extras) cloud.extra_fields[column->name] = kept_values(*column, kept);
   return cloud;
 }
 
