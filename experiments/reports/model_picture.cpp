@@ -20,16 +20,14 @@ namespace quadrix {
 
 namespace {
 
-
 void check_range(const char* name, double value, double minimum, double maximum) {
   if (!(value >= minimum && value <= maximum))
     throw Error(std::string("mesh picture option ") + name + " must be within " + std::to_string(minimum) + ".." +
                 std::to_string(maximum) + ", got " + std::to_string(value));
 }
 
-}  // namespace
-
-RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options) {
+/// Refuses an empty mesh and picture options out of range, naming the option.
+void check_picture_inputs(const TriangleMesh& mesh, const MeshPictureOptions& options) {
   if (mesh.vertices.cols() == 0 || mesh.triangles.empty()) throw Error("render_mesh: the mesh has no triangles");
   check_range("width", options.width, 64, 8192);
   check_range("height", options.height, 64, 8192);
@@ -38,8 +36,19 @@ RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options
   check_range("zoom", options.zoom, 0.05, 100.0);
   check_range("elevation_deg", options.elevation_deg, -89.0, 89.0);
   if (!(options.up.norm() > 0.0)) throw Error("mesh picture option up must be a non-zero vector");
+}
 
-  // Camera frame: looks at the centre of the vertices' bounding box from the azimuth/elevation direction.
+/// The camera's frame and its projection onto the supersampled image.
+struct MeshCamera {
+  Eigen::Vector3d eye, forward, right, up, towards_camera;
+  bool perspective = true;
+  double focal = 0.0, cx = 0.0, cy = 0.0;  // pixels per unit of the image plane, image centre
+  int width = 0, height = 0;               // supersampled image size
+};
+
+/// Aims at the vertices' bounding-box centre from azimuth/elevation so the bounding sphere spans the shorter side.
+MeshCamera frame_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options) {
+  MeshCamera camera;
   const Eigen::Vector3d lower = mesh.vertices.rowwise().minCoeff(), upper = mesh.vertices.rowwise().maxCoeff();
   const Eigen::Vector3d centre = 0.5 * (lower + upper);
   const double radius = std::max(1e-6, 0.5 * (upper - lower).norm()) / options.zoom;
@@ -47,36 +56,83 @@ RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options
   const Eigen::Vector3d helper = std::abs(up.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
   const Eigen::Vector3d east = (helper - helper.dot(up) * up).normalized(), north = up.cross(east);
   const double azimuth = options.azimuth_deg * kPi / 180.0, elevation = options.elevation_deg * kPi / 180.0;
-  const Eigen::Vector3d towards_camera =
+  camera.towards_camera =
       (std::cos(elevation) * (std::cos(azimuth) * east + std::sin(azimuth) * north) + std::sin(elevation) * up).normalized();
-  const Eigen::Vector3d forward = -towards_camera;
-  const Eigen::Vector3d right = forward.cross(up).normalized();
-  const Eigen::Vector3d camera_up = right.cross(forward);
-  const bool perspective = options.field_of_view_deg > 0.0;
+  camera.forward = -camera.towards_camera;
+  camera.right = camera.forward.cross(up).normalized();
+  camera.up = camera.right.cross(camera.forward);
+  camera.perspective = options.field_of_view_deg > 0.0;
   const double half_angle = 0.5 * options.field_of_view_deg * kPi / 180.0;
-  const double distance = perspective ? radius / std::sin(half_angle) : 2.0 * radius;
-  const Eigen::Vector3d eye = centre + distance * towards_camera;
+  const double distance = camera.perspective ? radius / std::sin(half_angle) : 2.0 * radius;
+  camera.eye = centre + distance * camera.towards_camera;
 
-  const int width = options.width * options.supersampling, height = options.height * options.supersampling;
+  camera.width = options.width * options.supersampling;
+  camera.height = options.height * options.supersampling;
   // Pixels per unit of the image plane: the bounding sphere spans the shorter side.
-  const double focal = 0.5 * std::min(width, height) / (perspective ? std::tan(half_angle) : radius);
-  const double cx = 0.5 * width, cy = 0.5 * height;
+  camera.focal = 0.5 * std::min(camera.width, camera.height) / (camera.perspective ? std::tan(half_angle) : radius);
+  camera.cx = 0.5 * camera.width;
+  camera.cy = 0.5 * camera.height;
+  return camera;
+}
 
-  std::vector<Eigen::Vector3d> screen(static_cast<std::size_t>(mesh.vertices.cols()));  // x, y pixels, depth
+/// Every vertex as x, y pixels of the supersampled image and depth along the view direction.
+std::vector<Eigen::Vector3d> project_vertices(const TriangleMesh& mesh, const MeshCamera& camera) {
+  std::vector<Eigen::Vector3d> screen(static_cast<std::size_t>(mesh.vertices.cols()));
   for (Eigen::Index v = 0; v < mesh.vertices.cols(); ++v) {
-    const Eigen::Vector3d relative = mesh.vertices.col(v) - eye;
-    const double depth = relative.dot(forward);
-    const double divisor = perspective ? std::max(depth, 1e-6) : 1.0;
-    screen[static_cast<std::size_t>(v)] = Eigen::Vector3d(cx + focal * relative.dot(right) / divisor,
-                                                          cy - focal * relative.dot(camera_up) / divisor, depth);
+    const Eigen::Vector3d relative = mesh.vertices.col(v) - camera.eye;
+    const double depth = relative.dot(camera.forward);
+    const double divisor = camera.perspective ? std::max(depth, 1e-6) : 1.0;
+    screen[static_cast<std::size_t>(v)] = Eigen::Vector3d(camera.cx + camera.focal * relative.dot(camera.right) / divisor,
+                                                          camera.cy - camera.focal * relative.dot(camera.up) / divisor, depth);
   }
-  std::vector<double> depth_buffer(static_cast<std::size_t>(width) * height, std::numeric_limits<double>::infinity());
-  std::vector<std::array<double, 3>> colour(static_cast<std::size_t>(width) * height,
-                                             {static_cast<double>(options.background[0]),
-                                              static_cast<double>(options.background[1]),
-                                              static_cast<double>(options.background[2])});
-  // Key light from over the viewer's left shoulder, plus ambient; two-sided (open surfaces).
-  const Eigen::Vector3d light = (towards_camera + 0.6 * camera_up - 0.4 * right).normalized();
+  return screen;
+}
+
+/// Colour and depth of every pixel of the supersampled image.
+struct Framebuffer {
+  int width = 0, height = 0;
+  std::vector<double> depth;
+  std::vector<std::array<double, 3>> colour;
+};
+
+/// An image of the background colour with every depth at infinity.
+Framebuffer empty_framebuffer(const MeshCamera& camera, const MeshPictureOptions& options) {
+  Framebuffer frame;
+  frame.width = camera.width;
+  frame.height = camera.height;
+  frame.depth.assign(static_cast<std::size_t>(camera.width) * camera.height, std::numeric_limits<double>::infinity());
+  frame.colour.assign(static_cast<std::size_t>(camera.width) * camera.height,
+                      {static_cast<double>(options.background[0]), static_cast<double>(options.background[1]),
+                       static_cast<double>(options.background[2])});
+  return frame;
+}
+
+/// Paints `base` x `shade` on the pixels inside screen triangle abc (signed `area`) where it is the nearest surface.
+void fill_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, double area,
+                   const std::array<double, 3>& base, double shade, Framebuffer& frame) {
+  const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
+  const int x1 = std::min(frame.width - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
+  const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
+  const int y1 = std::min(frame.height - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), c.y()}))));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const double px = x + 0.5, py = y + 0.5;
+      const double wa = ((b.x() - px) * (c.y() - py) - (b.y() - py) * (c.x() - px)) / area;
+      const double wb = ((c.x() - px) * (a.y() - py) - (c.y() - py) * (a.x() - px)) / area;
+      const double wc = 1.0 - wa - wb;
+      if (wa < 0.0 || wb < 0.0 || wc < 0.0) continue;
+      const double depth = wa * a.z() + wb * b.z() + wc * c.z();
+      const std::size_t pixel = static_cast<std::size_t>(y) * frame.width + x;
+      if (depth >= frame.depth[pixel]) continue;
+      frame.depth[pixel] = depth;
+      for (int k = 0; k < 3; ++k) frame.colour[pixel][k] = base[k] * shade;
+    }
+}
+
+/// Draws every triangle flat-shaded, two-sided (open surfaces), by a key light over the left shoulder plus ambient.
+void draw_triangles(const TriangleMesh& mesh, const MeshCamera& camera, const std::vector<Eigen::Vector3d>& screen,
+                    Framebuffer& frame) {
+  const Eigen::Vector3d light = (camera.towards_camera + 0.6 * camera.up - 0.4 * camera.right).normalized();
   const bool coloured = mesh.colors.size() == static_cast<std::size_t>(mesh.vertices.cols());
   for (const Eigen::Vector3i& triangle : mesh.triangles) {
     if ((triangle.array() < 0).any() || (triangle.array() >= mesh.vertices.cols()).any())
@@ -84,7 +140,7 @@ RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options
     const Eigen::Vector3d& a = screen[static_cast<std::size_t>(triangle[0])];
     const Eigen::Vector3d& b = screen[static_cast<std::size_t>(triangle[1])];
     const Eigen::Vector3d& c = screen[static_cast<std::size_t>(triangle[2])];
-    if (perspective && (a.z() <= 1e-3 || b.z() <= 1e-3 || c.z() <= 1e-3)) continue;  // behind the camera
+    if (camera.perspective && (a.z() <= 1e-3 || b.z() <= 1e-3 || c.z() <= 1e-3)) continue;  // behind the camera
     const double area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
     if (std::abs(area) < 1e-12) continue;
     const Eigen::Vector3d normal = (mesh.vertices.col(triangle[1]) - mesh.vertices.col(triangle[0]))
@@ -96,24 +152,12 @@ RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options
       for (int k = 0; k < 3; ++k)
         base[k] = (mesh.colors[static_cast<std::size_t>(triangle[0])][k] + mesh.colors[static_cast<std::size_t>(triangle[1])][k] +
                    mesh.colors[static_cast<std::size_t>(triangle[2])][k]) / 3.0;
-    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
-    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
-    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
-    const int y1 = std::min(height - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), c.y()}))));
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const double px = x + 0.5, py = y + 0.5;
-        const double wa = ((b.x() - px) * (c.y() - py) - (b.y() - py) * (c.x() - px)) / area;
-        const double wb = ((c.x() - px) * (a.y() - py) - (c.y() - py) * (a.x() - px)) / area;
-        const double wc = 1.0 - wa - wb;
-        if (wa < 0.0 || wb < 0.0 || wc < 0.0) continue;
-        const double depth = wa * a.z() + wb * b.z() + wc * c.z();
-        const std::size_t pixel = static_cast<std::size_t>(y) * width + x;
-        if (depth >= depth_buffer[pixel]) continue;
-        depth_buffer[pixel] = depth;
-        for (int k = 0; k < 3; ++k) colour[pixel][k] = base[k] * shade;
-      }
+    fill_triangle(a, b, c, area, base, shade, frame);
   }
+}
+
+/// Box-filters the supersampled image down to the picture's size (smooth edges).
+RgbImage downsample(const Framebuffer& frame, const MeshPictureOptions& options) {
   RgbImage image;
   image.width = options.width;
   image.height = options.height;
@@ -125,11 +169,22 @@ RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options
         double sum = 0.0;
         for (int dy = 0; dy < factor; ++dy)
           for (int dx = 0; dx < factor; ++dx)
-            sum += colour[static_cast<std::size_t>(y * factor + dy) * width + (x * factor + dx)][k];
+            sum += frame.colour[static_cast<std::size_t>(y * factor + dy) * frame.width + (x * factor + dx)][k];
         image.pixels[(static_cast<std::size_t>(y) * image.width + x) * 3 + k] =
             static_cast<std::uint8_t>(std::clamp(std::lround(sum / (factor * factor)), 0L, 255L));
       }
   return image;
+}
+
+}  // namespace
+
+RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options) {
+  check_picture_inputs(mesh, options);
+  const MeshCamera camera = frame_mesh(mesh, options);
+  const std::vector<Eigen::Vector3d> screen = project_vertices(mesh, camera);
+  Framebuffer frame = empty_framebuffer(camera, options);
+  draw_triangles(mesh, camera, screen, frame);
+  return downsample(frame, options);
 }
 
 void write_rgb_png(const std::string& path, const RgbImage& image) {
