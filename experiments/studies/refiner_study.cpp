@@ -100,47 +100,49 @@ SceneTruth scene_truth(const std::string& name) {
   return truth;
 }
 
-/// The synthetic problems of one scene and trial: every noise level x outlier fraction shares the
-/// truth pose, the element subset, the noise draws, the wrong partners and the start (common random numbers).
-std::vector<Problem> synthetic_problems(const std::string& name, const SceneTruth& truth, int trial,
-                                        const RefinerStudyOptions& options) {
+/// The seed of one scene and trial: the base seed mixed with a hash of the scene's name and the trial.
+std::uint64_t synthetic_problem_seed(const std::string& name, int trial, const RefinerStudyOptions& options) {
   std::uint64_t scene_hash = 1469598103934665603ULL;
   for (const char c : name) scene_hash = (scene_hash ^ static_cast<unsigned char>(c)) * 1099511628211ULL;
-  PortableRandom random(mix_bits(options.seed ^ scene_hash ^ (static_cast<std::uint64_t>(trial) << 40)));
-  const std::vector<ScenePrimitive>& primitives = truth.scene.primitives;
+  return mix_bits(options.seed ^ scene_hash ^ (static_cast<std::uint64_t>(trial) << 40));
+}
 
-  // Ground truth: any heading, a slight tilt, tens of metres of translation.
+/// A ground-truth pose of the kind a loop closure has: any heading, a slight tilt, tens of metres of translation.
+Eigen::Isometry3d draw_truth_pose(PortableRandom& random) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() = (Eigen::AngleAxisd(random.uniform(0.0, 2.0 * kPi), Eigen::Vector3d::UnitZ()) *
                    Eigen::AngleAxisd(random.uniform(-3.0, 3.0) * kPi / 180.0, Eigen::Vector3d::UnitX()) *
                    Eigen::AngleAxisd(random.uniform(-3.0, 3.0) * kPi / 180.0, Eigen::Vector3d::UnitY()))
                       .toRotationMatrix();
   pose.translation() = Eigen::Vector3d(random.uniform(-20.0, 20.0), random.uniform(-20.0, 20.0), random.uniform(-1.0, 1.0));
+  return pose;
+}
 
-  // Element subset (a random one when the scene has more primitives than the cap), in scene order.
-  std::vector<std::size_t> chosen(primitives.size());
+/// The primitives used as elements, in scene order: all, or a random `cap` of them so problems stay small.
+std::vector<std::size_t> choose_elements(std::size_t primitive_count, std::size_t cap, PortableRandom& random) {
+  std::vector<std::size_t> chosen(primitive_count);
   std::iota(chosen.begin(), chosen.end(), std::size_t{0});
-  if (chosen.size() > options.max_synthetic_elements) {
+  if (chosen.size() > cap) {
     for (std::size_t i = chosen.size() - 1; i > 0; --i)
       std::swap(chosen[i], chosen[static_cast<std::size_t>(random.uniform_integer(0, static_cast<int>(i)))]);
-    chosen.resize(options.max_synthetic_elements);
+    chosen.resize(cap);
     std::sort(chosen.begin(), chosen.end());
   }
-  const std::size_t count = chosen.size();
+  return chosen;
+}
 
-  // Per-element draws: noise directions and scale, the order in which correspondences turn wrong and
-  // each one's wrong partner (same semantic label when the subset has another such element).
-  std::vector<Eigen::Vector3d> rotation_draws(count), shift_draws(count);
-  std::vector<double> scale_draws(count);
-  for (std::size_t k = 0; k < count; ++k) {
-    rotation_draws[k] = Eigen::Vector3d(random.normal(0.0, 1.0), random.normal(0.0, 1.0), random.normal(0.0, 1.0));
-    shift_draws[k] = Eigen::Vector3d(random.normal(0.0, 1.0), random.normal(0.0, 1.0), random.normal(0.0, 1.0));
-    scale_draws[k] = random.normal(0.0, 1.0);
-  }
-  std::vector<std::size_t> wrong_order(count);
-  std::iota(wrong_order.begin(), wrong_order.end(), std::size_t{0});
-  for (std::size_t i = count - 1; i > 0; --i)
-    std::swap(wrong_order[i], wrong_order[static_cast<std::size_t>(random.uniform_integer(0, static_cast<int>(i)))]);
+/// Per-element draws that every noise level and outlier fraction of a trial share (common random numbers).
+struct ElementDraws {
+  std::vector<Eigen::Vector3d> rotation, shift;  // unit-variance noise directions
+  std::vector<double> scale;                     // unit-variance scale noise
+  std::vector<std::size_t> wrong_order;          // the order in which correspondences turn wrong
+  std::vector<std::size_t> wrong_partner;        // each element's wrong target
+};
+
+/// Each element's wrong partner: one of the same semantic label when there is one (plausible mistakes), else any.
+std::vector<std::size_t> draw_wrong_partners(const std::vector<ScenePrimitive>& primitives, const std::vector<std::size_t>& chosen,
+                                             PortableRandom& random) {
+  const std::size_t count = chosen.size();
   std::vector<std::size_t> wrong_partner(count);
   for (std::size_t k = 0; k < count; ++k) {
     std::vector<std::size_t> same_label;
@@ -153,6 +155,71 @@ std::vector<Problem> synthetic_problems(const std::string& name, const SceneTrut
       wrong_partner[k] = other >= k ? other + 1 : other;
     }
   }
+  return wrong_partner;
+}
+
+/// Draws noise, then the order correspondences turn wrong, then wrong partners: the seeded rows rely on this order.
+ElementDraws draw_elements(const std::vector<ScenePrimitive>& primitives, const std::vector<std::size_t>& chosen,
+                           PortableRandom& random) {
+  const std::size_t count = chosen.size();
+  ElementDraws draws;
+  draws.rotation.resize(count);
+  draws.shift.resize(count);
+  draws.scale.resize(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    draws.rotation[k] = Eigen::Vector3d(random.normal(0.0, 1.0), random.normal(0.0, 1.0), random.normal(0.0, 1.0));
+    draws.shift[k] = Eigen::Vector3d(random.normal(0.0, 1.0), random.normal(0.0, 1.0), random.normal(0.0, 1.0));
+    draws.scale[k] = random.normal(0.0, 1.0);
+  }
+  draws.wrong_order.resize(count);
+  std::iota(draws.wrong_order.begin(), draws.wrong_order.end(), std::size_t{0});
+  for (std::size_t i = count - 1; i > 0; --i)
+    std::swap(draws.wrong_order[i], draws.wrong_order[static_cast<std::size_t>(random.uniform_integer(0, static_cast<int>(i)))]);
+  draws.wrong_partner = draw_wrong_partners(primitives, chosen, random);
+  return draws;
+}
+
+/// Target records at one noise level: each primitive moved by the pose, jittered about its centre and scaled.
+std::vector<QuadricRecord> noisy_target_records(const SceneTruth& truth, const std::vector<std::size_t>& chosen,
+                                                const Eigen::Isometry3d& pose, const ElementDraws& draws,
+                                                const AttributeNoise& noise) {
+  std::vector<QuadricRecord> target;
+  for (std::size_t k = 0; k < chosen.size(); ++k) {
+    const ScenePrimitive& primitive = truth.scene.primitives[chosen[k]];
+    const Eigen::Isometry3d jitter = jitter_about(pose * primitive.pose.translation(), draws.rotation[k], draws.shift[k],
+                                                  noise.axis_degrees * kPi / 180.0, noise.centre);
+    const Eigen::Isometry3d motion = jitter * pose;
+    const double scale_factor = std::max(0.2, 1.0 + noise.scale * draws.scale[k]);
+    ScenePrimitive moved = primitive;
+    moved.pose = motion * primitive.pose;
+    moved.scale = primitive.scale * scale_factor;
+    StatisticalPose statistics = truth.statistics[chosen[k]];
+    statistics.scale *= scale_factor;
+    statistics.rotation = motion.linear() * statistics.rotation;
+    statistics.center = motion * statistics.center;
+    target.push_back(make_quadric_record(static_cast<std::uint32_t>(primitive.label), model_quadric(moved), statistics));
+  }
+  return target;
+}
+
+/// Correspondences k -> k, the first `wrong` of the wrong order sent to their partners (nested wrong sets).
+std::vector<RecordCorrespondence> synthetic_correspondences(std::size_t count, std::size_t wrong, const ElementDraws& draws) {
+  std::vector<RecordCorrespondence> pairs(count);
+  for (std::size_t k = 0; k < count; ++k) pairs[k] = {k, k};
+  for (std::size_t w = 0; w < wrong; ++w) pairs[draws.wrong_order[w]].target_index = draws.wrong_partner[draws.wrong_order[w]];
+  return pairs;
+}
+
+/// The synthetic problems of one scene and trial: every noise level x outlier fraction shares the
+/// truth pose, the element subset, the noise draws, the wrong partners and the start (common random numbers).
+std::vector<Problem> synthetic_problems(const std::string& name, const SceneTruth& truth, int trial,
+                                        const RefinerStudyOptions& options) {
+  PortableRandom random(synthetic_problem_seed(name, trial, options));
+  const std::vector<ScenePrimitive>& primitives = truth.scene.primitives;
+  const Eigen::Isometry3d pose = draw_truth_pose(random);
+  const std::vector<std::size_t> chosen = choose_elements(primitives.size(), options.max_synthetic_elements, random);
+  const std::size_t count = chosen.size();
+  const ElementDraws draws = draw_elements(primitives, chosen, random);
   const Eigen::Isometry3d start = perturbed_start(pose, options, random);
 
   std::vector<QuadricRecord> source;
@@ -165,30 +232,11 @@ std::vector<Problem> synthetic_problems(const std::string& name, const SceneTrut
 
   std::vector<Problem> problems;
   for (const AttributeNoise& noise : options.noise_levels) {
-    // Target records: each true primitive moved by the pose, then by its own small rigid motion
-    // about its centre (centre and axes noise) and scaled (scale noise), statistics moved alike.
-    std::vector<QuadricRecord> target;
-    for (std::size_t k = 0; k < count; ++k) {
-      const ScenePrimitive& primitive = primitives[chosen[k]];
-      const Eigen::Isometry3d jitter = jitter_about(pose * primitive.pose.translation(), rotation_draws[k], shift_draws[k],
-                                                    noise.axis_degrees * kPi / 180.0, noise.centre);
-      const Eigen::Isometry3d motion = jitter * pose;
-      const double scale_factor = std::max(0.2, 1.0 + noise.scale * scale_draws[k]);
-      ScenePrimitive moved = primitive;
-      moved.pose = motion * primitive.pose;
-      moved.scale = primitive.scale * scale_factor;
-      StatisticalPose statistics = truth.statistics[chosen[k]];
-      statistics.scale *= scale_factor;
-      statistics.rotation = motion.linear() * statistics.rotation;
-      statistics.center = motion * statistics.center;
-      target.push_back(make_quadric_record(static_cast<std::uint32_t>(primitive.label), model_quadric(moved), statistics));
-    }
+    const std::vector<QuadricRecord> target = noisy_target_records(truth, chosen, pose, draws, noise);
     const std::vector<QuadricDecomposition> target_shapes = decompose_records(target);
     for (const double fraction : options.outlier_fractions) {
       const auto wrong = static_cast<std::size_t>(std::llround(fraction * static_cast<double>(count)));
-      std::vector<RecordCorrespondence> pairs(count);
-      for (std::size_t k = 0; k < count; ++k) pairs[k] = {k, k};
-      for (std::size_t w = 0; w < wrong; ++w) pairs[wrong_order[w]].target_index = wrong_partner[wrong_order[w]];
+      const std::vector<RecordCorrespondence> pairs = synthetic_correspondences(count, wrong, draws);
       Problem problem;
       problem.source = name;
       problem.correspondence_set = "synthetic";
@@ -234,8 +282,6 @@ std::vector<PairRow> read_pairs_table(const std::string& path) {
   return rows;
 }
 
-/// Labels f_pp applies to, as in register_models (estimation/registration.cpp): planes, lines,
-/// trunks, cylinders and cones; the ground is the reference, central quadrics have no axis test.
 /// The real problems of one loop-closure pair: its ground-truth inliers and the pipeline's clique.
 std::vector<Problem> real_problems(const PairRow& pair, std::size_t pair_index, const RegistrationOptions& registration,
                                    std::map<std::string, SceneModel>& models, const RefinerStudyOptions& options,
@@ -571,163 +617,197 @@ void write_refiner_study_csv(const std::string& path, const RefinerStudyResult& 
   });
 }
 
+namespace {
+
+/// The synthetic rows of one configuration (backend, algorithm and loss) that `keep` accepts.
+std::vector<const RefinerStudyRow*> synthetic_rows(const RefinerStudyResult& result, const RefinerConfiguration& configuration,
+                                                   const RowFilter& keep) {
+  return rows_where(result, [&](const RefinerStudyRow& r) {
+    return r.correspondence_set == "synthetic" && same_configuration(r, configuration) && keep(r);
+  });
+}
+
+/// The rows of one backend/algorithm, every loss pooled, that `keep` accepts.
+std::vector<const RefinerStudyRow*> method_rows(const RefinerStudyResult& result, const RefinerConfiguration& method,
+                                                const RowFilter& keep) {
+  return rows_where(result, [&](const RefinerStudyRow& r) {
+    return r.backend == method.backend && (method.algorithm.empty() || r.algorithm == method.algorithm) && keep(r);
+  });
+}
+
+/// Title and prose (run, objective, problems, starts, "converged") from the run's options, so text matches numbers.
+void write_study_introduction(std::ostream& out, const RefinerStudyResult& result, const RefinerStudyOptions& options,
+                              const std::string& command_line) {
+  out << "# Refiner study: Ceres vs NLopt\n\n"
+      << "Generated by `" << command_line << "` (" << result.rows.size() << " refinements plus one reference refinement per "
+      << "problem and configuration, " << fixed(result.seconds, 1) << " s wall time, " << options.threads
+      << " worker thread(s) on 2 shared, loaded cores). Raw rows: `refiners.csv` beside this file; plot: `refiners.svg`. "
+      << "Seeds are fixed (base seed " << options.seed << "): a rerun gives the same rows except the times.\n\n"
+      << "Every configuration minimises the same objective, F(T) = 1/2 sum rho(w ||e(T)||^2) with e the degeneracy-aware "
+         "quadric distance of paper Eq. (quadrics distance) (Algorithm 1, LMOptimizer; `estimation/refiner.h`), with the "
+         "backends' default budgets and tolerances. Robust kernels use scale "
+      << fixed(options.loss_scale, 2) << " (a of Huber/Cauchy, Phi of DCS).\n\n"
+      << "## Problems\n\n"
+      << "- **Synthetic** (`" ;
+  for (std::size_t i = 0; i < options.scenes.size(); ++i) out << (i ? "`, `" : "") << options.scenes[i];
+  out << "`): the ground-truth records of the scene's primitives (layout seed 1; at most " << options.max_synthetic_elements
+      << " primitives, a random subset per trial) are the source; the target is every primitive moved by a random pose (any "
+         "heading, up to 3 deg tilt, up to 20 m) and, at the noisy level, by its own rigid jitter about its centre (centre sigma, "
+         "axis-rotation sigma per axis) with its scales multiplied by 1 + sigma_s N(0,1). Noise levels (centre / axes / scale): ";
+  for (std::size_t i = 0; i < options.noise_levels.size(); ++i)
+    out << (i ? ", " : "") << fixed(100.0 * options.noise_levels[i].centre, 0) << " cm / " << fixed(options.noise_levels[i].axis_degrees, 1)
+        << " deg / " << fixed(100.0 * options.noise_levels[i].scale, 0) << "%";
+  out << ". Wrong correspondences: a share of {";
+  for (std::size_t i = 0; i < options.outlier_fractions.size(); ++i) out << (i ? ", " : "") << percent_label(options.outlier_fractions[i]);
+  out << "} of the pairs point to another primitive of the same semantic label (nested sets, common random numbers). Factors "
+         "are built as Algorithm 1 does (augmentation of lines and planes"
+      << (options.augment_non_central ? "" : " disabled") << "; no f_pp filter and no ground factor: synthetic records have no "
+         "estimated ground). " << options.trials << " trials per scene, each with one start.\n"
+      << "- **Real** (KITTI loop closures of `pairs.tsv`, exact ground truth): both clouds modelled with the `" << options.real_preset
+      << "` preset as `quadrix register` does; correspondence sets `gt_inliers` (putative correspondences within "
+      << fixed(kInlierDistance, 1) << " m under the ground truth) and `clique` (the maximum clique of the level the pipeline selects, "
+         "which may hold wrong pairs); factors with f_pp against the estimated ground normals, augmentation and the ground factor, "
+         "as the pipeline builds them. "
+      << options.trials << " starts per set.\n"
+      << "- **Starts**: the ground truth perturbed by exactly " << fixed(options.minimum_translation, 1) << "-"
+      << fixed(options.maximum_translation, 1) << " m (uniform, random direction) and " << fixed(options.minimum_rotation_degrees, 0)
+      << "-" << fixed(options.maximum_rotation_degrees, 0) << " deg (uniform, random axis).\n\n"
+      << "**Converged** means: on noise-free synthetic problems without wrong correspondences (criterion `truth`), RTE < "
+      << fixed(100.0 * options.converged_translation, 0) << " cm and RRE < " << number(options.converged_rotation_degrees)
+      << " deg against the ground truth; everywhere else (criterion `reference`), the final pose within "
+      << fixed(100.0 * options.converged_translation, 0) << " cm / " << number(options.converged_rotation_degrees)
+      << " deg of the **reference**, i.e. the same configuration started at the ground truth: the minimum the optimiser should "
+         "find. Whether that minimum is accurate is a property of the loss, shown by the reference's own RTE/RRE. A degenerate "
+         "or failed refinement never counts as converged.\n\n";
+}
+
+/// Headline: each backend/algorithm pooled over losses, noise levels and scenes, to compare backends at a glance.
+void write_headline_table(std::ostream& out, const RefinerStudyResult& result, const std::vector<double>& outlier_levels) {
+  out << "## Headline\n\nConverged share per backend/algorithm, pooled over every loss, noise level and scene (synthetic) or "
+         "pair and correspondence set (real); median CPU and wall time per synthetic refinement.\n\n| backend/algorithm |";
+  for (const double level : outlier_levels) out << " synthetic, " << percent_label(level) << " wrong |";
+  out << " real KITTI | median CPU time | median wall time |\n|---|";
+  for (std::size_t i = 0; i < outlier_levels.size() + 3; ++i) out << "---:|";
+  out << '\n';
+  for (const RefinerConfiguration& method : distinct_methods(result)) {
+    out << "| " << refiner_configuration_name(method) << " |";
+    for (const double level : outlier_levels)
+      out << ' ' << fixed(convergence_percent(method_rows(result, method, [&](const RefinerStudyRow& r) {
+            return r.correspondence_set == "synthetic" && r.outlier_fraction == level;
+          })), 0) << "% |";
+    const auto synthetic = method_rows(result, method, [](const RefinerStudyRow& r) { return r.correspondence_set == "synthetic"; });
+    out << ' ' << fixed(convergence_percent(method_rows(result, method, [](const RefinerStudyRow& r) { return r.correspondence_set != "synthetic"; })), 0)
+        << "% | " << fixed(median(column(synthetic, &RefinerStudyRow::cpu_ms)), 2) << " ms | "
+        << fixed(median(column(synthetic, &RefinerStudyRow::time_ms)), 2) << " ms |\n";
+  }
+  out << '\n';
+}
+
+/// One synthetic noise level: every configuration's convergence, RTE and RRE by share of wrong correspondences.
+void write_wrong_share_table(std::ostream& out, const RefinerStudyResult& result, double noise,
+                             const std::vector<double>& outlier_levels) {
+  out << "## Synthetic, centre noise " << fixed(100.0 * noise, 0) << " cm: convergence by wrong-correspondence share\n\n"
+      << "Cells: converged share / median RTE / median RRE (RTE and RRE against the ground truth), both scenes.\n\n| configuration | loss |";
+  for (const double level : outlier_levels) out << ' ' << percent_label(level) << " wrong |";
+  out << "\n|---|---|";
+  for (std::size_t i = 0; i < outlier_levels.size(); ++i) out << "---:|";
+  out << '\n';
+  for (const RefinerConfiguration& configuration : result.configurations) {
+    out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " |";
+    for (const double level : outlier_levels) {
+      const auto rows =
+          synthetic_rows(result, configuration, [&](const RefinerStudyRow& r) { return r.noise == noise && r.outlier_fraction == level; });
+      out << ' ' << fixed(convergence_percent(rows), 0) << "% / " << fixed(100.0 * median(column(rows, &RefinerStudyRow::rte)), 2)
+          << " cm / " << fixed(median(column(rows, &RefinerStudyRow::rre_degrees)), 3) << "° |";
+    }
+    out << '\n';
+  }
+  out << '\n';
+}
+
+/// Convergence and RTE per scene and noise level without wrong correspondences, to show which scene is harder.
+void write_per_scene_table(std::ostream& out, const RefinerStudyResult& result, const RefinerStudyOptions& options,
+                           const std::vector<double>& noise_levels) {
+  out << "## Per scene (synthetic, no wrong correspondences)\n\nCells: converged share / median RTE, per noise level.\n\n| configuration | loss |";
+  std::vector<std::pair<std::string, double>> scene_columns;
+  for (const std::string& scene : options.scenes)
+    for (const double noise : noise_levels) scene_columns.emplace_back(scene, noise);
+  for (const auto& [scene, noise] : scene_columns) out << ' ' << scene << ", " << fixed(100.0 * noise, 0) << " cm |";
+  out << "\n|---|---|";
+  for (std::size_t i = 0; i < scene_columns.size(); ++i) out << "---:|";
+  out << '\n';
+  for (const RefinerConfiguration& configuration : result.configurations) {
+    out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " |";
+    for (const auto& [scene, noise] : scene_columns) {
+      const auto rows = synthetic_rows(result, configuration, [&, s = scene, n = noise](const RefinerStudyRow& r) {
+        return r.source == s && r.noise == n && r.outlier_fraction == 0.0;
+      });
+      out << ' ' << fixed(convergence_percent(rows), 0) << "% / " << fixed(100.0 * median(column(rows, &RefinerStudyRow::rte)), 2) << " cm |";
+    }
+    out << '\n';
+  }
+}
+
+/// Iterations, evaluations, CPU and wall time per refinement over every synthetic problem.
+void write_cost_table(std::ostream& out, const RefinerStudyResult& result) {
+  out << "\n## Cost per refinement (every synthetic problem)\n\nIterations: Ceres minimiser iterations; NLopt evaluations that "
+         "improved the best cost. Evaluations: objective evaluations. CPU time is the refining thread's; wall time is "
+         "RefinementResult::seconds, inflated by the other work on 2 shared, loaded cores.\n\n"
+      << "| configuration | loss | median iterations | median evaluations | median CPU time | 90th pct CPU time | median wall time | median factors |\n"
+      << "|---|---|---:|---:|---:|---:|---:|---:|\n";
+  for (const RefinerConfiguration& configuration : result.configurations) {
+    const auto rows = synthetic_rows(result, configuration, [](const RefinerStudyRow&) { return true; });
+    std::vector<double> factors;
+    for (const RefinerStudyRow* row : rows) factors.push_back(static_cast<double>(row->factors));
+    out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " | "
+        << fixed(median(int_column(rows, &RefinerStudyRow::iterations)), 0) << " | "
+        << fixed(median(int_column(rows, &RefinerStudyRow::evaluations)), 0) << " | "
+        << fixed(median(column(rows, &RefinerStudyRow::cpu_ms)), 2) << " ms | "
+        << fixed(percentile(column(rows, &RefinerStudyRow::cpu_ms), 0.9), 2) << " ms | "
+        << fixed(median(column(rows, &RefinerStudyRow::time_ms)), 2) << " ms | " << fixed(median(factors), 0) << " |\n";
+  }
+}
+
+/// KITTI: each pair's notes, then every configuration on ground-truth inliers and the clique, beside the reference.
+void write_real_pairs_table(std::ostream& out, const RefinerStudyResult& result) {
+  const auto real = rows_where(result, [](const RefinerStudyRow& r) { return r.correspondence_set != "synthetic"; });
+  out << "\n## Real KITTI loop closures\n\n";
+  for (const std::string& note : result.notes) out << "- " << note << '\n';
+  if (real.empty()) return;
+  out << "\nCells: converged share (criterion `reference`) / median RTE / median RRE of the refinements from perturbed starts / "
+         "RTE and RRE of the reference; CPU time = median per refinement.\n\n"
+      << "| configuration | loss | gt_inliers | clique | CPU time |\n|---|---|---:|---:|---:|\n";
+  for (const RefinerConfiguration& configuration : result.configurations) {
+    out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " |";
+    for (const char* set : {"gt_inliers", "clique"}) {
+      const auto rows = rows_where(result, [&](const RefinerStudyRow& r) {
+        return r.correspondence_set == set && same_configuration(r, configuration);
+      });
+      out << ' ' << fixed(convergence_percent(rows), 0) << "% / " << fixed(100.0 * median(column(rows, &RefinerStudyRow::rte)), 1)
+          << " cm / " << fixed(median(column(rows, &RefinerStudyRow::rre_degrees)), 2) << "° / ref "
+          << fixed(100.0 * median(column(rows, &RefinerStudyRow::reference_rte)), 1) << " cm, "
+          << fixed(median(column(rows, &RefinerStudyRow::reference_rre_degrees)), 2) << "° |";
+    }
+    const auto rows = rows_where(result, [&](const RefinerStudyRow& r) {
+      return r.correspondence_set != "synthetic" && same_configuration(r, configuration);
+    });
+    out << ' ' << fixed(median(column(rows, &RefinerStudyRow::cpu_ms)), 2) << " ms |\n";
+  }
+}
+
+}  // namespace
+
 void write_refiner_study_markdown(const std::string& path, const RefinerStudyResult& result, const RefinerStudyOptions& options,
                                   const std::string& command_line) {
   const std::vector<double> outlier_levels = synthetic_levels(result, &RefinerStudyRow::outlier_fraction);
   const std::vector<double> noise_levels = synthetic_levels(result, &RefinerStudyRow::noise);
-  const auto synthetic = [&](const RefinerConfiguration& configuration, const RowFilter& keep) {
-    return rows_where(result, [&](const RefinerStudyRow& r) {
-      return r.correspondence_set == "synthetic" && same_configuration(r, configuration) && keep(r);
-    });
-  };
   write_file_atomically(path, [&](std::ostream& out) {
-    out << "# Refiner study: Ceres vs NLopt\n\n"
-        << "Generated by `" << command_line << "` (" << result.rows.size() << " refinements plus one reference refinement per "
-        << "problem and configuration, " << fixed(result.seconds, 1) << " s wall time, " << options.threads
-        << " worker thread(s) on 2 shared, loaded cores). Raw rows: `refiners.csv` beside this file; plot: `refiners.svg`. "
-        << "Seeds are fixed (base seed " << options.seed << "): a rerun gives the same rows except the times.\n\n"
-        << "Every configuration minimises the same objective, F(T) = 1/2 sum rho(w ||e(T)||^2) with e the degeneracy-aware "
-           "quadric distance of paper Eq. (quadrics distance) (Algorithm 1, LMOptimizer; `estimation/refiner.h`), with the "
-           "backends' default budgets and tolerances. Robust kernels use scale "
-        << fixed(options.loss_scale, 2) << " (a of Huber/Cauchy, Phi of DCS).\n\n"
-        << "## Problems\n\n"
-        << "- **Synthetic** (`" ;
-    for (std::size_t i = 0; i < options.scenes.size(); ++i) out << (i ? "`, `" : "") << options.scenes[i];
-    out << "`): the ground-truth records of the scene's primitives (layout seed 1; at most " << options.max_synthetic_elements
-        << " primitives, a random subset per trial) are the source; the target is every primitive moved by a random pose (any "
-           "heading, up to 3 deg tilt, up to 20 m) and, at the noisy level, by its own rigid jitter about its centre (centre sigma, "
-           "axis-rotation sigma per axis) with its scales multiplied by 1 + sigma_s N(0,1). Noise levels (centre / axes / scale): ";
-    for (std::size_t i = 0; i < options.noise_levels.size(); ++i)
-      out << (i ? ", " : "") << fixed(100.0 * options.noise_levels[i].centre, 0) << " cm / " << fixed(options.noise_levels[i].axis_degrees, 1)
-          << " deg / " << fixed(100.0 * options.noise_levels[i].scale, 0) << "%";
-    out << ". Wrong correspondences: a share of {";
-    for (std::size_t i = 0; i < options.outlier_fractions.size(); ++i) out << (i ? ", " : "") << percent_label(options.outlier_fractions[i]);
-    out << "} of the pairs point to another primitive of the same semantic label (nested sets, common random numbers). Factors "
-           "are built as Algorithm 1 does (augmentation of lines and planes"
-        << (options.augment_non_central ? "" : " disabled") << "; no f_pp filter and no ground factor: synthetic records have no "
-           "estimated ground). " << options.trials << " trials per scene, each with one start.\n"
-        << "- **Real** (KITTI loop closures of `pairs.tsv`, exact ground truth): both clouds modelled with the `" << options.real_preset
-        << "` preset as `quadrix register` does; correspondence sets `gt_inliers` (putative correspondences within "
-        << fixed(kInlierDistance, 1) << " m under the ground truth) and `clique` (the maximum clique of the level the pipeline selects, "
-           "which may hold wrong pairs); factors with f_pp against the estimated ground normals, augmentation and the ground factor, "
-           "as the pipeline builds them. "
-        << options.trials << " starts per set.\n"
-        << "- **Starts**: the ground truth perturbed by exactly " << fixed(options.minimum_translation, 1) << "-"
-        << fixed(options.maximum_translation, 1) << " m (uniform, random direction) and " << fixed(options.minimum_rotation_degrees, 0)
-        << "-" << fixed(options.maximum_rotation_degrees, 0) << " deg (uniform, random axis).\n\n"
-        << "**Converged** means: on noise-free synthetic problems without wrong correspondences (criterion `truth`), RTE < "
-        << fixed(100.0 * options.converged_translation, 0) << " cm and RRE < " << number(options.converged_rotation_degrees)
-        << " deg against the ground truth; everywhere else (criterion `reference`), the final pose within "
-        << fixed(100.0 * options.converged_translation, 0) << " cm / " << number(options.converged_rotation_degrees)
-        << " deg of the **reference**, i.e. the same configuration started at the ground truth: the minimum the optimiser should "
-           "find. Whether that minimum is accurate is a property of the loss, shown by the reference's own RTE/RRE. A degenerate "
-           "or failed refinement never counts as converged.\n\n";
-
-    // Headline: each backend/algorithm pooled over losses, noise levels and scenes.
-    const std::vector<RefinerConfiguration> methods = distinct_methods(result);
-    const auto method_rows = [&](const RefinerConfiguration& method, const RowFilter& keep) {
-      return rows_where(result, [&](const RefinerStudyRow& r) {
-        return r.backend == method.backend && (method.algorithm.empty() || r.algorithm == method.algorithm) && keep(r);
-      });
-    };
-    out << "## Headline\n\nConverged share per backend/algorithm, pooled over every loss, noise level and scene (synthetic) or "
-           "pair and correspondence set (real); median CPU and wall time per synthetic refinement.\n\n| backend/algorithm |";
-    for (const double level : outlier_levels) out << " synthetic, " << percent_label(level) << " wrong |";
-    out << " real KITTI | median CPU time | median wall time |\n|---|";
-    for (std::size_t i = 0; i < outlier_levels.size() + 3; ++i) out << "---:|";
-    out << '\n';
-    for (const RefinerConfiguration& method : methods) {
-      out << "| " << refiner_configuration_name(method) << " |";
-      for (const double level : outlier_levels)
-        out << ' ' << fixed(convergence_percent(method_rows(method, [&](const RefinerStudyRow& r) {
-              return r.correspondence_set == "synthetic" && r.outlier_fraction == level;
-            })), 0) << "% |";
-      const auto synthetic_rows = method_rows(method, [](const RefinerStudyRow& r) { return r.correspondence_set == "synthetic"; });
-      out << ' ' << fixed(convergence_percent(method_rows(method, [](const RefinerStudyRow& r) { return r.correspondence_set != "synthetic"; })), 0)
-          << "% | " << fixed(median(column(synthetic_rows, &RefinerStudyRow::cpu_ms)), 2) << " ms | "
-          << fixed(median(column(synthetic_rows, &RefinerStudyRow::time_ms)), 2) << " ms |\n";
-    }
-    out << '\n';
-
-    for (const double noise : noise_levels) {
-      out << "## Synthetic, centre noise " << fixed(100.0 * noise, 0) << " cm: convergence by wrong-correspondence share\n\n"
-          << "Cells: converged share / median RTE / median RRE (RTE and RRE against the ground truth), both scenes.\n\n| configuration | loss |";
-      for (const double level : outlier_levels) out << ' ' << percent_label(level) << " wrong |";
-      out << "\n|---|---|";
-      for (std::size_t i = 0; i < outlier_levels.size(); ++i) out << "---:|";
-      out << '\n';
-      for (const RefinerConfiguration& configuration : result.configurations) {
-        out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " |";
-        for (const double level : outlier_levels) {
-          const auto rows = synthetic(configuration, [&](const RefinerStudyRow& r) { return r.noise == noise && r.outlier_fraction == level; });
-          out << ' ' << fixed(convergence_percent(rows), 0) << "% / " << fixed(100.0 * median(column(rows, &RefinerStudyRow::rte)), 2)
-              << " cm / " << fixed(median(column(rows, &RefinerStudyRow::rre_degrees)), 3) << "° |";
-        }
-        out << '\n';
-      }
-      out << '\n';
-    }
-
-    out << "## Per scene (synthetic, no wrong correspondences)\n\nCells: converged share / median RTE, per noise level.\n\n| configuration | loss |";
-    std::vector<std::pair<std::string, double>> scene_columns;
-    for (const std::string& scene : options.scenes)
-      for (const double noise : noise_levels) scene_columns.emplace_back(scene, noise);
-    for (const auto& [scene, noise] : scene_columns) out << ' ' << scene << ", " << fixed(100.0 * noise, 0) << " cm |";
-    out << "\n|---|---|";
-    for (std::size_t i = 0; i < scene_columns.size(); ++i) out << "---:|";
-    out << '\n';
-    for (const RefinerConfiguration& configuration : result.configurations) {
-      out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " |";
-      for (const auto& [scene, noise] : scene_columns) {
-        const auto rows = synthetic(configuration, [&, s = scene, n = noise](const RefinerStudyRow& r) {
-          return r.source == s && r.noise == n && r.outlier_fraction == 0.0;
-        });
-        out << ' ' << fixed(convergence_percent(rows), 0) << "% / " << fixed(100.0 * median(column(rows, &RefinerStudyRow::rte)), 2) << " cm |";
-      }
-      out << '\n';
-    }
-
-    out << "\n## Cost per refinement (every synthetic problem)\n\nIterations: Ceres minimiser iterations; NLopt evaluations that "
-           "improved the best cost. Evaluations: objective evaluations. CPU time is the refining thread's; wall time is "
-           "RefinementResult::seconds, inflated by the other work on 2 shared, loaded cores.\n\n"
-        << "| configuration | loss | median iterations | median evaluations | median CPU time | 90th pct CPU time | median wall time | median factors |\n"
-        << "|---|---|---:|---:|---:|---:|---:|---:|\n";
-    for (const RefinerConfiguration& configuration : result.configurations) {
-      const auto rows = synthetic(configuration, [](const RefinerStudyRow&) { return true; });
-      std::vector<double> factors;
-      for (const RefinerStudyRow* row : rows) factors.push_back(static_cast<double>(row->factors));
-      out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " | "
-          << fixed(median(int_column(rows, &RefinerStudyRow::iterations)), 0) << " | "
-          << fixed(median(int_column(rows, &RefinerStudyRow::evaluations)), 0) << " | "
-          << fixed(median(column(rows, &RefinerStudyRow::cpu_ms)), 2) << " ms | "
-          << fixed(percentile(column(rows, &RefinerStudyRow::cpu_ms), 0.9), 2) << " ms | "
-          << fixed(median(column(rows, &RefinerStudyRow::time_ms)), 2) << " ms | " << fixed(median(factors), 0) << " |\n";
-    }
-
-    const auto real = rows_where(result, [](const RefinerStudyRow& r) { return r.correspondence_set != "synthetic"; });
-    out << "\n## Real KITTI loop closures\n\n";
-    for (const std::string& note : result.notes) out << "- " << note << '\n';
-    if (!real.empty()) {
-      out << "\nCells: converged share (criterion `reference`) / median RTE / median RRE of the refinements from perturbed starts / "
-             "RTE and RRE of the reference; CPU time = median per refinement.\n\n"
-          << "| configuration | loss | gt_inliers | clique | CPU time |\n|---|---|---:|---:|---:|\n";
-      for (const RefinerConfiguration& configuration : result.configurations) {
-        out << "| " << refiner_configuration_name(configuration) << " | " << robust_loss_name(configuration.loss) << " |";
-        for (const char* set : {"gt_inliers", "clique"}) {
-          const auto rows = rows_where(result, [&](const RefinerStudyRow& r) {
-            return r.correspondence_set == set && same_configuration(r, configuration);
-          });
-          out << ' ' << fixed(convergence_percent(rows), 0) << "% / " << fixed(100.0 * median(column(rows, &RefinerStudyRow::rte)), 1)
-              << " cm / " << fixed(median(column(rows, &RefinerStudyRow::rre_degrees)), 2) << "° / ref "
-              << fixed(100.0 * median(column(rows, &RefinerStudyRow::reference_rte)), 1) << " cm, "
-              << fixed(median(column(rows, &RefinerStudyRow::reference_rre_degrees)), 2) << "° |";
-        }
-        const auto rows = rows_where(result, [&](const RefinerStudyRow& r) {
-          return r.correspondence_set != "synthetic" && same_configuration(r, configuration);
-        });
-        out << ' ' << fixed(median(column(rows, &RefinerStudyRow::cpu_ms)), 2) << " ms |\n";
-      }
-    }
+    write_study_introduction(out, result, options, command_line);
+    write_headline_table(out, result, outlier_levels);
+    for (const double noise : noise_levels) write_wrong_share_table(out, result, noise, outlier_levels);
+    write_per_scene_table(out, result, options, noise_levels);
+    write_cost_table(out, result);
+    write_real_pairs_table(out, result);
   });
 }
 
