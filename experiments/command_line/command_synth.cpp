@@ -1,11 +1,14 @@
 // `quadrix synth SCENE --seed N --sensor hdl64|vlp16|livox|tls [--poses POSE_SPEC] --out DIR`:
 // simulates scans of a built-in scene and writes a self-describing folder with the ground truth;
-// `quadrix synth --list` names the scenes and sensors.
+// `quadrix synth --list` names the scenes and sensors. `quadrix synth loop-closures` writes a
+// loop-closure benchmark set (loop_closure_set.h) instead of one scene's scans.
 #include "experiments/command_line/command_registry.h"
+#include "experiments/synthetic/loop_closure_set.h"
 #include "experiments/synthetic/synthetic_output.h"
 #include "geometry/error.h"
 
 #include <chrono>
+#include <map>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -25,11 +28,16 @@ struct SynthCommandOptions {
   std::optional<double> noise;         ///< range noise sigma override, metres
   std::optional<double> dropout;       ///< dropout probability override
   bool list = false;                   ///< list scenes and sensors, then exit
+  LoopClosureSetOptions loop_set;      ///< loop-closures only: streets, pairs per bin, scan spacing
 };
 
 void print_listing() {
   std::printf("scenes:\n");
   for (const auto& name : scene_names()) std::printf("  %-9s %s\n", name.c_str(), scene_description(name).c_str());
+  std::printf("  %-9s %s\n", "loop-closures",
+              "benchmark set, not a scene: --streets street layouts from --seed on, each driven twice (the second "
+              "pass the other way, with other parked cars and pedestrians), --pairs-per-bin pairs per street in each "
+              "of the bins 0-10, 10-20, 20-30 m; writes pairs.tsv for quadrix bench");
   std::printf("sensors:\n");
   for (const auto& name : sensor_names()) {
     const SensorModel sensor = sensor_preset(name);
@@ -44,6 +52,21 @@ void run_command(const SynthCommandOptions& options) {
   }
   if (options.scene.empty()) throw Error("synth: SCENE is required (one of street, corridor, monument; see --list)");
   if (options.out.empty()) throw Error("synth: --out DIR is required");
+  if (options.scene == "loop-closures") {
+    LoopClosureSetOptions loop_set = options.loop_set;
+    loop_set.first_seed = options.seed;
+    loop_set.sensor = options.sensor;
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(options.out, loop_set);
+    std::map<std::string, int> per_bin;
+    for (const LoopClosureSetPair& pair : pairs) ++per_bin[pair.bin];
+    std::printf("loop-closure set: %d streets from seed %llu, %zu pairs (", loop_set.streets,
+                static_cast<unsigned long long>(loop_set.first_seed), pairs.size());
+    for (const auto& [bin, count] : per_bin) std::printf("%s%s m: %d", bin == per_bin.begin()->first ? "" : ", ", bin.c_str(), count);
+    std::printf(") in %.1f s; run it with quadrix bench --pairs %s/pairs.tsv\n",
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), options.out.c_str());
+    return;
+  }
   SensorModel sensor = sensor_preset(options.sensor);
   if (options.noise) {
     if (!(*options.noise >= 0.0)) throw Error("--noise: expected a range noise sigma >= 0 in metres");
@@ -89,7 +112,7 @@ const CommandRegistration registration(20, [](CLI::App& app) {
   auto options = std::make_shared<SynthCommandOptions>();
   CLI::App* command =
       app.add_subcommand("synth", "Simulate LiDAR/TLS scans of a built-in scene and write clouds plus ground truth");
-  command->add_option("scene", options->scene, "Scene: street, corridor or monument (see --list)");
+  command->add_option("scene", options->scene, "Scene: street, corridor or monument, or loop-closures (see --list)");
   command->add_flag("--list", options->list, "List the scenes and sensors, then exit");
   command->add_option("--seed", options->seed, "Seed of the layout (street, corridor) and of noise/dropout")
       ->capture_default_str();
@@ -102,6 +125,11 @@ const CommandRegistration registration(20, [](CLI::App& app) {
   command->add_flag("--ascii", options->ascii, "Write ascii clouds instead of binary");
   command->add_option("--noise", options->noise, "Gaussian range noise sigma in metres (overrides the preset)");
   command->add_option("--dropout", options->dropout, "Probability that a return is lost (overrides the preset)");
+  command->add_option("--streets", options->loop_set.streets, "loop-closures: number of street layouts")->capture_default_str();
+  command->add_option("--pairs-per-bin", options->loop_set.pairs_per_bin, "loop-closures: pairs per street and distance bin")
+      ->capture_default_str();
+  command->add_option("--scan-spacing", options->loop_set.scan_spacing, "loop-closures: metres between scans of a pass")
+      ->capture_default_str();
   command->callback([options] { run_command(*options); });
 });
 

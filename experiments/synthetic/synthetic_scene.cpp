@@ -19,6 +19,7 @@ const std::vector<SemanticLabelInfo>& semantic_label_table() {
   static const std::vector<SemanticLabelInfo> table = {
       {SemanticLabel::Unlabelled, "unlabelled", "no primitive"},
       {SemanticLabel::Car, "car", "parked car body, ellipsoid"},
+      {SemanticLabel::Person, "person", "pedestrian, upright ellipsoid"},
       {SemanticLabel::Road, "road", "drivable road surface, plane"},
       {SemanticLabel::Sidewalk, "sidewalk", "raised pavement beside the road, plane"},
       {SemanticLabel::Ground, "ground", "plaza, verge or other ground, plane"},
@@ -394,6 +395,14 @@ class SceneBuilder {
   void add(const ScenePrimitive& primitive) { scene_.primitives.push_back(primitive); }
 
   Scene& scene_;
+
+ public:
+  /// Appends a primitive of another scene under the next id.
+  void copy(const ScenePrimitive& primitive) {
+    ScenePrimitive copied = primitive;
+    copied.id = static_cast<std::uint32_t>(scene_.primitives.size());
+    add(copied);
+  }
 };
 
 std::string numbered(const std::string& stem, int index) {
@@ -647,6 +656,121 @@ Scene make_street_scene(std::uint64_t seed) {
         make_pose(Eigen::Matrix3d::Identity(), Eigen::Vector3d(x, station % 2 == 0 ? -1.0 : 1.0, ground_height(x) + 1.8)));
   }
   return scene;
+}
+
+namespace {
+
+// The measures of a street that a second pass needs, read back from make_street_scene's primitives.
+struct StreetMeasures {
+  double gradient = 0.0;         // road rise per metre along x
+  double road_half_width = 0.0;  // m
+  double kerb_height = 0.0;      // m
+};
+
+StreetMeasures measure_street(const Scene& street) {
+  StreetMeasures measures;
+  for (const ScenePrimitive& primitive : street.primitives) {
+    if (primitive.name == "road") {
+      const Eigen::Vector3d along = primitive.pose.linear().col(1);  // the rectangle's edge_b: the road's length
+      measures.gradient = along.z() / along.x();
+      measures.road_half_width = 0.5 * primitive.extent.maximum.z();
+    } else if (primitive.name == "kerb_right") {
+      measures.kerb_height = primitive.extent.maximum.z();
+    }
+  }
+  if (!(measures.road_half_width > 0.0 && measures.kerb_height > 0.0))
+    throw Error("make_street_pass: the street has no road or kerb primitive");
+  return measures;
+}
+
+// A parked car as make_street_scene draws one: an ellipsoid of `radii` centred over x in the parking lane.
+void add_parked_car(SceneBuilder& builder, const std::string& name, const StreetMeasures& street, double side,
+                    double center_x, const Eigen::Vector3d& radii, double yaw) {
+  const Eigen::Matrix3d rotation =
+      Eigen::AngleAxisd(-std::atan(street.gradient), Eigen::Vector3d::UnitY()).toRotationMatrix() * yaw_rotation(yaw);
+  const Eigen::Vector3d center(center_x, side * (street.road_half_width - 1.15),
+                               street.gradient * center_x + 0.25 + 0.7 * radii.z());
+  builder.ellipsoid(name, SemanticLabel::Car, center, rotation, radii, -0.7 * radii.z(), radii.z());
+}
+
+// New parked cars in the free kerb space of both lanes: `occupied` holds each lane's taken x intervals.
+void park_new_cars(SceneBuilder& builder, PortableRandom& random, const StreetMeasures& street, int pass,
+                   std::vector<std::pair<double, double>> occupied[2]) {
+  int count = 0;
+  for (int side_index = 0; side_index < 2; ++side_index) {
+    const double side = side_index == 0 ? -1.0 : 1.0;
+    const int wanted = random.uniform_integer(2, 6);
+    for (int attempt = 0, added = 0; attempt < 40 && added < wanted; ++attempt) {
+      const Eigen::Vector3d radii(random.uniform(2.0, 2.4), random.uniform(0.85, 0.95), random.uniform(0.7, 0.8));
+      const double center_x = random.uniform(-64.0, 64.0);
+      const double yaw = degrees(random.uniform(-3.0, 3.0));
+      const double low = center_x - radii.x() - 0.5, high = center_x + radii.x() + 0.5;
+      bool free = true;
+      for (const auto& interval : occupied[side_index]) free = free && (high < interval.first || low > interval.second);
+      if (!free) continue;
+      occupied[side_index].emplace_back(low, high);
+      add_parked_car(builder, numbered("car_pass" + std::to_string(pass), count++), street, side, center_x, radii, yaw);
+      ++added;
+    }
+  }
+}
+
+// Pedestrians: most on the sidewalks, some crossing the road.
+void add_pedestrians(SceneBuilder& builder, PortableRandom& random, const StreetMeasures& street, int pass) {
+  const int count = random.uniform_integer(6, 14);
+  for (int i = 0; i < count; ++i) {
+    const double x = random.uniform(-64.0, 64.0);
+    const bool crossing = random.bernoulli(0.2);
+    const double side = random.bernoulli(0.5) ? 1.0 : -1.0;
+    const double y = crossing ? random.uniform(-street.road_half_width + 0.5, street.road_half_width - 0.5)
+                              : side * (street.road_half_width + random.uniform(0.6, 2.2));
+    const Eigen::Vector3d radii(random.uniform(0.22, 0.3), random.uniform(0.15, 0.22), random.uniform(0.8, 0.9));
+    const double base = street.gradient * x + (crossing ? 0.0 : street.kerb_height);
+    builder.ellipsoid(numbered("pedestrian_pass" + std::to_string(pass), i), SemanticLabel::Person,
+                      Eigen::Vector3d(x, y, base + radii.z()), yaw_rotation(random.uniform(0.0, 2.0 * kPi)), radii,
+                      -radii.z(), radii.z());
+  }
+}
+
+}  // namespace
+
+StreetPass make_street_pass(std::uint64_t seed, int pass, double scan_spacing) {
+  if (pass < 1) throw Error("make_street_pass: pass must be at least 1, got " + std::to_string(pass));
+  if (!(scan_spacing > 0.0)) throw Error("make_street_pass: scan_spacing must be positive, got " + std::to_string(scan_spacing));
+  const Scene street = make_street_scene(seed);
+  const StreetMeasures measures = measure_street(street);
+  PortableRandom random(mix_bits(seed * 1000003ULL + static_cast<std::uint64_t>(pass)));
+  StreetPass result;
+  Scene& scene = result.scene;
+  scene.name = street.name;
+  scene.seed = seed;
+  scene.description = street.description + "; pass " + std::to_string(pass) + ": parked cars re-drawn, pedestrians added";
+  scene.default_lidar_poses = street.default_lidar_poses;
+  scene.default_tls_stations = street.default_tls_stations;
+  SceneBuilder builder(scene);
+  std::vector<std::pair<double, double>> occupied[2];
+  for (const ScenePrimitive& primitive : street.primitives) {
+    if (primitive.label != SemanticLabel::Car) {
+      builder.copy(primitive);
+      continue;
+    }
+    if (!random.bernoulli(0.5)) continue;  // this car has left
+    builder.copy(primitive);
+    const double center_x = primitive.pose.translation().x();
+    occupied[primitive.pose.translation().y() < 0.0 ? 0 : 1].emplace_back(center_x - primitive.scale.x() - 0.5,
+                                                                           center_x + primitive.scale.x() + 0.5);
+  }
+  park_new_cars(builder, random, measures, pass, occupied);
+  add_pedestrians(builder, random, measures, pass);
+
+  const bool forward = pass % 2 == 1;
+  const double lane = (forward ? -0.5 : 0.5) * measures.road_half_width;
+  for (double along = -48.0 + (forward ? 0.0 : 0.5 * scan_spacing); along <= 48.0 + 1e-9; along += scan_spacing) {
+    const double x = forward ? along : -along;
+    const double yaw = (forward ? 0.0 : kPi) + degrees(random.uniform(-4.0, 4.0));
+    result.poses.push_back(vehicle_pose(x, lane + random.uniform(-0.5, 0.5), 1.73, yaw, measures.gradient));
+  }
+  return result;
 }
 
 Scene make_corridor_scene(std::uint64_t seed) {

@@ -28,6 +28,7 @@ namespace quadrix {
 enum class SemanticLabel : std::uint32_t {
   Unlabelled = 0,     ///< no primitive (never written for a hit)
   Car = 10,           ///< parked car body (ellipsoid)
+  Person = 30,        ///< pedestrian (upright ellipsoid)
   Road = 40,          ///< drivable road surface (plane)
   Sidewalk = 48,      ///< raised pavement beside the road (plane)
   Ground = 49,        ///< other ground: plazas, verges (plane)
@@ -95,6 +96,18 @@ Scene make_scene(const std::string& name, std::uint64_t seed);
 /// KITTI-like urban block with a random layout per seed (sloped road, recessed facades, poles,
 /// trees, parked cars, kerbs, bollards, traffic cones), closed by cross facades at both ends.
 Scene make_street_scene(std::uint64_t seed);
+/// One drive along a street scene: the scene as that drive saw it and the sensor poses of its scans.
+struct StreetPass {
+  Scene scene;                                ///< the street with this pass's parked cars and pedestrians
+  std::vector<Eigen::Isometry3d> poses;       ///< sensor -> world, one per scan, in driving order
+};
+/// A drive along make_street_scene(seed): the same road, buildings, poles and trees, with the parked
+/// cars re-drawn (each kept with probability 0.5, new ones in free kerb space) and 6-14 pedestrians,
+/// all drawn from (seed, pass). Odd passes drive +x in the right lane, even passes -x in the left lane
+/// (the opposite direction); one scan every `scan_spacing` metres for x in [-48, 48] (even passes offset
+/// by half a spacing), each with +-0.5 m of lateral and +-4 degrees of heading jitter. Throws
+/// quadrix::Error when pass < 1 or scan_spacing is not positive.
+StreetPass make_street_pass(std::uint64_t seed, int pass, double scan_spacing);
 /// Long straight road between continuous barriers and noise walls with evenly spaced poles and no
 /// end walls: translation along the road is unobservable (degenerate registration).
 Scene make_corridor_scene(std::uint64_t seed);

@@ -1,0 +1,121 @@
+// The synthetic loop-closure set: a second pass of a street keeps its static structure and changes
+// its parked cars and pedestrians; the set's pairs land in their distance bins with exact ground truth.
+#include "experiments/benchmark/bench_pairs.h"
+#include "experiments/synthetic/loop_closure_set.h"
+#include "experiments/synthetic/synthetic_output.h"
+#include "experiments/synthetic/synthetic_scene.h"
+#include "geometry/constants.h"
+#include "geometry/error.h"
+#include "geometry/io.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+#include <unistd.h>
+
+namespace quadrix {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string text_of(const fs::path& path) {
+  std::ifstream file(path);
+  return std::string(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+}
+
+// Names of the primitives of `scene` with `label`, or of every other label when `other` is set.
+std::set<std::string> names_of(const Scene& scene, SemanticLabel label, bool other = false) {
+  std::set<std::string> names;
+  for (const ScenePrimitive& primitive : scene.primitives)
+    if ((primitive.label == label) != other) names.insert(primitive.name);
+  return names;
+}
+
+TEST(StreetPass, KeepsTheStreetAndChangesCarsAndPedestrians) {
+  for (const std::uint64_t seed : {3u, 17u}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Scene street = make_street_scene(seed);
+    const StreetPass first = make_street_pass(seed, 1, 3.0);
+    const StreetPass second = make_street_pass(seed, 2, 3.0);
+    for (const StreetPass* pass : {&first, &second}) {
+      for (std::size_t i = 0; i < pass->scene.primitives.size(); ++i) EXPECT_EQ(pass->scene.primitives[i].id, i);
+      // Everything but cars and pedestrians is the street's own.
+      std::set<std::string> static_names = names_of(pass->scene, SemanticLabel::Car, true);
+      for (const std::string& name : names_of(pass->scene, SemanticLabel::Person)) static_names.erase(name);
+      EXPECT_EQ(static_names, names_of(street, SemanticLabel::Car, true));
+      const std::size_t pedestrians = names_of(pass->scene, SemanticLabel::Person).size();
+      EXPECT_GE(pedestrians, 6u);
+      EXPECT_LE(pedestrians, 14u);
+    }
+    // The passes see different parked cars: some of the street's cars left, some new ones came.
+    const std::set<std::string> cars_first = names_of(first.scene, SemanticLabel::Car);
+    const std::set<std::string> cars_second = names_of(second.scene, SemanticLabel::Car);
+    EXPECT_NE(cars_first, cars_second);
+    EXPECT_LT(cars_first.size() + cars_second.size(), 4 * names_of(street, SemanticLabel::Car).size());
+    // Pass 1 drives +x, pass 2 drives -x, one scan every 3 m over [-48, 48].
+    ASSERT_EQ(first.poses.size(), 33u);
+    ASSERT_EQ(second.poses.size(), 32u);
+    for (const Eigen::Isometry3d& pose : first.poses) EXPECT_GT(pose.linear().col(0).x(), std::cos(5.0 * kPi / 180.0));
+    for (const Eigen::Isometry3d& pose : second.poses) EXPECT_LT(pose.linear().col(0).x(), -std::cos(5.0 * kPi / 180.0));
+    EXPECT_LT(first.poses.front().translation().x(), first.poses.back().translation().x());
+    EXPECT_GT(second.poses.front().translation().x(), second.poses.back().translation().x());
+    // Deterministic.
+    EXPECT_EQ(primitives_json(make_street_pass(seed, 2, 3.0).scene, 50), primitives_json(second.scene, 50));
+  }
+  EXPECT_THROW(make_street_pass(1, 0, 3.0), Error);
+  EXPECT_THROW(make_street_pass(1, 1, 0.0), Error);
+}
+
+TEST(LoopClosureSet, PairsLieInTheirBinsWithExactGroundTruth) {
+  const fs::path folder = fs::temp_directory_path() / ("quadrix_loop_set_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  LoopClosureSetOptions options;
+  options.first_seed = 5;
+  options.streets = 1;
+  options.scan_spacing = 8.0;  // few scans (13 + 12), 4 + 8k m apart along the street: every bin has pairs
+  options.pairs_per_bin = 3;
+  const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(folder.string(), options);
+  std::map<std::string, int> per_bin;
+  for (const LoopClosureSetPair& pair : pairs) ++per_bin[pair.bin];
+  EXPECT_EQ(per_bin, (std::map<std::string, int>{{"0-10", 3}, {"10-20", 3}, {"20-30", 3}}));
+  const std::vector<BenchPair> read = read_pairs_tsv((folder / "pairs.tsv").string());
+  ASSERT_EQ(read.size(), pairs.size());
+  for (std::size_t k = 0; k < read.size(); ++k) {
+    SCOPED_TRACE(read[k].id);
+    EXPECT_EQ(read[k].id, pairs[k].id);
+    EXPECT_EQ(read[k].kind, pairs[k].bin);
+    ASSERT_TRUE(read[k].ground_truth.has_value());
+    // The truth maps the source's sensor pose onto the target's: p_target = T p_source.
+    const Eigen::Isometry3d source_pose = read_pose_matrix((folder / fs::path(pairs[k].source).parent_path() /
+                                                             ("pose_" + pairs[k].source.substr(pairs[k].source.size() - 7, 3) + ".txt")).string());
+    const Eigen::Isometry3d target_pose = read_pose_matrix((folder / fs::path(pairs[k].target).parent_path() /
+                                                             ("pose_" + pairs[k].target.substr(pairs[k].target.size() - 7, 3) + ".txt")).string());
+    EXPECT_TRUE(read[k].ground_truth->isApprox(target_pose.inverse() * source_pose, 1e-9));
+    const double distance = read[k].ground_truth->translation().norm();
+    const std::size_t dash = pairs[k].bin.find('-');
+    EXPECT_GE(distance, std::stod(pairs[k].bin.substr(0, dash)));
+    EXPECT_LT(distance, std::stod(pairs[k].bin.substr(dash + 1)));
+    EXPECT_GT(pairs[k].rotation, 160.0);  // the second pass drives the other way
+    EXPECT_GT(read_point_cloud(read[k].source).size(), 10000u);
+    EXPECT_FALSE(read_point_cloud(read[k].target).labels.empty());
+  }
+  // Same options, same bytes.
+  const fs::path again = folder / "again";
+  write_loop_closure_set(again.string(), options);
+  EXPECT_EQ(text_of(folder / "pairs.tsv"), text_of(again / "pairs.tsv"));
+  LoopClosureSetOptions bad = options;
+  bad.bins = {{10.0, 5.0}};
+  EXPECT_THROW(write_loop_closure_set((folder / "bad").string(), bad), Error);
+  bad = options;
+  bad.streets = 0;
+  EXPECT_THROW(write_loop_closure_set((folder / "bad").string(), bad), Error);
+  fs::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace quadrix
