@@ -3,7 +3,7 @@ BUILD_DIR ?= build
 JOBS ?= 2
 CMAKE_ARGS ?=
 
-.PHONY: all setup configure build test demo clean train-fitter papers study-refiners fuzz fuzz-build fuzz-smoke test-sanitize
+.PHONY: all setup configure build test demo clean train-fitter papers study-refiners study-fitters fuzz fuzz-build fuzz-smoke test-sanitize
 
 all: build
 
@@ -75,13 +75,25 @@ study-refiners: configure
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target quadrix
 	$(BUILD_DIR)/bin/quadrix compare-refiners --out papers/studies
 
-# Trains the learned fitter (fitting/training/train_learned_fitter.py) on synthetic segments and
-# exports its weights into fitting/models/learned_fitter/. Training only: build and tests never run it.
-# Uses Debian's python3-torch/python3-numpy via /usr/bin/python3 (installed here when missing).
-train-fitter:
+# Regenerates the committed fitter study (papers/studies/fitters.{md,csv,svg}) with its fixed seeds;
+# needs ../shared/data for the real segments (skipped with a note when absent).
+study-fitters: configure
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target quadrix
+	$(BUILD_DIR)/bin/quadrix compare-fitters --out papers/studies
+
+# Trains the learned fitter (fitting/training/train_learned_fitter.py) on segments cut from simulated
+# scans (`quadrix fitter-segments`, fixed seed) plus analytic ones, and exports its weights into
+# fitting/models/learned_fitter/ and its loss curves into papers/studies/learned_fitter_training.svg.
+# Training only: build and tests never run it. Uses Debian's python3-torch/python3-numpy via
+# /usr/bin/python3 (installed here when missing). About 30 CPU-minutes, one thread.
+FITTER_SEGMENTS_DIR = $(BUILD_DIR)/fitter_segments
+train-fitter: configure
 	@/usr/bin/python3 -c "import torch, numpy" 2>/dev/null || \
 	  (apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends python3-torch python3-numpy)
-	/usr/bin/python3 fitting/training/train_learned_fitter.py
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target quadrix
+	$(BUILD_DIR)/bin/quadrix fitter-segments --seed 101 --scans 400 --object-scans 3000 --crops 2 --out $(FITTER_SEGMENTS_DIR)
+	/usr/bin/python3 fitting/training/train_learned_fitter.py --scan-segments $(FITTER_SEGMENTS_DIR) \
+	  --loss-svg papers/studies/learned_fitter_training.svg
 
 # Regenerates papers/quadricsreg/ (results/ and the page README.md) from a clean build: `quadrix bench`
 # on every pair of $(DATA_DIR)/pairs.tsv with every method, the six KITTI loop closures under random yaw

@@ -1,9 +1,11 @@
-"""Synthetic partial, noisy quadric segments and the learned fitter's input normalisation.
+"""Training segments of the learned fitter and its input normalisation.
 
-Used only by train_learned_fitter.py (training needs numpy; inference is C++/Eigen, see
+Two sources: segments cut from simulated scans by the C++ simulator (`quadrix fitter-segments`,
+experiments/synthetic/scan_segments.h; read by load_scan_segments), and the clean analytic samples
+below (make_segments). Used only by train_learned_fitter.py (training needs numpy; inference is C++/Eigen, see
 fitting/learned_fitter.cpp, which implements the same normalisation and decoding).
 
-A segment of one primitive type (paper §"Quadric Fitting": QuadricsNet is trained on fragmented,
+An analytic segment of one primitive type (paper §"Quadric Fitting": QuadricsNet is trained on fragmented,
 noisy point clouds with the parameters of the complete surface as ground truth):
   * random size in metres, random pose (uniform rotation, translation up to tens of metres);
   * a visible fraction f in [0.1, 1] of the surface (a cap of a sphere/ellipsoid, an angular
@@ -133,21 +135,13 @@ def normalise(points):
     return u, centre[:, 0, :], sigma, vectors
 
 
-def make_segments(rng, type_name, count, num_points, visible=None, noise=None):
-    """Normalised segments of one type and their ground truth in the normalised frame.
+def normalised_truth(type_name, world, rotation, translation, scale, visible, noise):
+    """Normalised inputs and ground truth of segments given in world (or sensor) coordinates.
 
-    Returns (inputs float32 (count, N, 3), truth dict of float64 arrays). `visible` and `noise`
-    default to the training ranges; pass arrays to fix them (e.g. clean full surfaces).
+    world (count, N, 3): the N sampled points; rotation (count, 3, 3), translation (count, 3):
+    canonical frame -> world; scale (count, 3): canonical scales (radii in metres, cone tangents).
+    Returns (inputs float32 (count, N, 3), truth dict of float64 arrays in the normalised frame).
     """
-    if visible is None:
-        visible = rng.uniform(VISIBLE_MIN, 1.0, size=count)
-    if noise is None:
-        noise = rng.uniform(0.0, NOISE_MAX, size=count)
-    canonical, scale = sample_canonical(rng, type_name, count, num_points, visible)
-    rotation = random_rotations(rng, count)
-    translation = rng.normal(size=(count, 3)) * 20.0
-    world = np.einsum("bij,bnj->bni", rotation, canonical) + translation[:, None, :]
-    world += rng.normal(size=world.shape) * noise[:, None, None]
     u, centre, sigma, frame = normalise(world)
     # Canonical pose in the normalised frame: R_n = E^T R, t_n = E^T (t - c) / sigma.
     rotation_n = np.einsum("bji,bjk->bik", frame, rotation)
@@ -173,3 +167,55 @@ def make_segments(rng, type_name, count, num_points, visible=None, noise=None):
         # Shape matrix A = R diag(s) R^T: invariant to the order and signs of the axes.
         truth["shape_matrix"] = np.einsum("bij,bj,bkj->bik", rotation_n, lengths, rotation_n)
     return u.astype(np.float32), truth
+
+
+def make_segments(rng, type_name, count, num_points, visible=None, noise=None):
+    """Normalised analytic segments of one type and their ground truth in the normalised frame.
+
+    Returns (inputs float32 (count, N, 3), truth dict of float64 arrays). `visible` and `noise`
+    default to the training ranges; pass arrays to fix them (e.g. clean full surfaces).
+    """
+    if visible is None:
+        visible = rng.uniform(VISIBLE_MIN, 1.0, size=count)
+    if noise is None:
+        noise = rng.uniform(0.0, NOISE_MAX, size=count)
+    canonical, scale = sample_canonical(rng, type_name, count, num_points, visible)
+    rotation = random_rotations(rng, count)
+    translation = rng.normal(size=(count, 3)) * 20.0
+    world = np.einsum("bij,bnj->bni", rotation, canonical) + translation[:, None, :]
+    world += rng.normal(size=world.shape) * noise[:, None, None]
+    return normalised_truth(type_name, world, rotation, translation, scale, visible, noise)
+
+
+def strided_sample(count, num_points):
+    """Column indices of the deterministic input sample (C++ learned_fitter_sample): point i of N is
+    column floor(i * M / N) when M >= N, else i mod M."""
+    index = np.arange(num_points)
+    return (index * count) // num_points if count >= num_points else index % count
+
+
+def load_scan_segments(directory, type_name, num_points):
+    """Segments of one type written by `quadrix fitter-segments` (experiments/synthetic/scan_segments.h),
+    sampled and normalised as the C++ fitter does. Returns (inputs, truth, extra) where extra holds
+    per-segment visible fraction, noise, range, leaked points and crop flags; None when there are none."""
+    import json
+    import os
+    with open(os.path.join(directory, "segments.json")) as stream:
+        description = json.load(stream)
+    table = np.load(os.path.join(directory, "segments.npy"))
+    points = np.load(os.path.join(directory, "points.npy")).astype(np.float64)
+    column = {name: index for index, name in enumerate(description["columns"])}
+    if type_name not in description["types"]:
+        return None
+    rows = table[table[:, column["type"]] == description["types"][type_name]]
+    if len(rows) == 0:
+        return None
+    world = np.stack([points[int(row[column["offset"]]) + strided_sample(int(row[column["count"]]), num_points)]
+                      for row in rows])
+    rotation = rows[:, column["r00"]:column["r22"] + 1].reshape(-1, 3, 3)
+    translation = rows[:, column["tx"]:column["tz"] + 1]
+    scale = rows[:, column["scale_0"]:column["scale_2"] + 1]
+    inputs, truth = normalised_truth(type_name, world, rotation, translation, scale,
+                                     rows[:, column["visible_fraction"]], rows[:, column["noise"]])
+    extra = {name: rows[:, column[name]] for name in ("visible_fraction", "noise", "range", "leaked_points", "crop")}
+    return inputs, truth, extra
