@@ -30,6 +30,7 @@ struct CompareFittersCommandOptions {
   int threads = FitterStudyOptions{}.threads;                ///< worker threads
   bool no_auto = false;             ///< skip the fits without a hint
   bool no_real = false;             ///< skip the real segments
+  bool no_scans = false;            ///< skip the held-apart simulated scan segments
   std::string data;                 ///< data folder; default $QUADRIX_DATA_DIR or ../shared/data
   std::string out = "fitter_study"; ///< output folder
 };
@@ -38,7 +39,8 @@ const CommandRegistration registration(45, [](CLI::App& app) {
   auto options = std::make_shared<CompareFittersCommandOptions>();
   CLI::App* command = app.add_subcommand(
       "compare-fitters",
-      "Run every quadric fitter on synthetic segments (type x noise x visible fraction x outliers) and real segments; "
+      "Run every quadric fitter on synthetic segments (type x noise x visible fraction x outliers), held-apart segments "
+      "cut from simulated scans and real segments; "
       "write fitters.csv, fitters.md and fitters.svg");
   command->add_option("--types", options->types, "Synthetic types (default: plane line sphere ellipsoid cylinder elliptic_cylinder cone)")
       ->delimiter(',');
@@ -53,6 +55,7 @@ const CommandRegistration registration(45, [](CLI::App& app) {
   command->add_option("--threads", options->threads, "Worker threads")->capture_default_str();
   command->add_flag("--no-auto", options->no_auto, "Skip the fits without a type hint (type accuracy)");
   command->add_flag("--no-real", options->no_real, "Skip the real segments from the data folder");
+  command->add_flag("--no-scans", options->no_scans, "Skip the held-apart segments cut from simulated scans");
   command->add_option("--data", options->data, "Real data folder (default: $QUADRIX_DATA_DIR, else ../shared/data)");
   command->add_option("--out", options->out, "Output folder for fitters.csv, fitters.md, fitters.svg")->capture_default_str();
   command->callback([options, command] {
@@ -74,6 +77,7 @@ const CommandRegistration registration(45, [](CLI::App& app) {
     study.threads = options->threads;
     study.automatic_type = !options->no_auto;
     study.real_data = !options->no_real;
+    study.scan_segments = !options->no_scans;
     if (!options->data.empty()) study.data_root = options->data;
     else if (const char* environment = std::getenv("QUADRIX_DATA_DIR")) study.data_root = environment;
 

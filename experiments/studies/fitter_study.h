@@ -64,24 +64,30 @@ struct FitterStudyOptions {
   int real_segment_max_points = 5000;                                    ///< real segments are thinned to at most this many points (every k-th)
   int kitti_facades = 3;                                                 ///< largest KITTI plane elements fitted as planes
   int kitti_poles = 4;                                                   ///< largest KITTI line elements (poles, trunks) fitted as cylinders and lines
+  bool scan_segments = true;                                             ///< also fit held-apart segments cut from simulated scans (experiments/synthetic/scan_segments.h)
+  std::uint64_t scan_seed = 7;                                           ///< their seed (the learned fitter is trained on seed 101: disjoint scenes, objects and noise)
+  int scan_scene_scans = 40;                                             ///< scene scans of the held-apart set
+  int scan_object_scans = 300;                                           ///< object scans of the held-apart set
+  int scan_segments_per_type = 150;                                      ///< at most this many held-apart segments per type (an even stride through them)
+  int scan_segment_max_points = 1000;                                    ///< held-apart segments are thinned to at most this many points
 };
 
 /// One fit in the study.
 struct FitterStudyRow {
-  std::string source;                                 ///< "synthetic" or the real segment's name
+  std::string source;                                 ///< "synthetic", "scan" (held-apart scan segment) or the real segment's name
   std::string fitter;                                 ///< registry name
   std::string mode;                                   ///< "hint" (type given) or "auto" (no hint)
   QuadricType true_type = QuadricType::Invalid;       ///< generating type (real data: the type asked for)
-  double noise = 0.0;                                 ///< metres (synthetic)
-  double visible_fraction = 1.0;                      ///< synthetic
-  double outlier_fraction = 0.0;                      ///< synthetic
-  int trial = 0;                                      ///< synthetic trial index
+  double noise = 0.0;                                 ///< metres (synthetic; scan segments: the scan's range noise sigma)
+  double visible_fraction = 1.0;                      ///< synthetic (scan segments: measured, scan_segment_visible_fraction)
+  double outlier_fraction = 0.0;                      ///< synthetic (scan segments: share of leaked neighbour points)
+  int trial = 0;                                      ///< synthetic trial index; scan segments: index in the held-apart set
   int points = 0;                                     ///< points fitted
   FitStatus status = FitStatus::Failed;               ///< fitter's status
   QuadricType fitted_type = QuadricType::Invalid;     ///< type of the returned quadric
   bool type_correct = false;                          ///< status ok/not_converged and fitted_type == true_type
   double scale_error = 0.0;                           ///< max relative error of the defined scales (NaN: none defined / wrong family / real data)
-  double axis_error_deg = 0.0;                        ///< angle of the defining axis (plane normal, line/cylinder/cone axis; ellipsoid: worst axis), degrees
+  double axis_error_deg = 0.0;                        ///< angle of the defining axis (plane normal, line/cylinder/cone axis; ellipsoid: worst axis), degrees; real segments: deviation from the physical reference (RealSegment::reference_axis)
   double centre_error = 0.0;                          ///< metres: centre distance (central types), distance from the true axis (line, cylinders), offset along the normal (plane)
   double residual_rms = 0.0;                          ///< RMS orthogonal distance of the fitted points (outliers included), metres
   double surface_rms = 0.0;                           ///< RMS distance of the noise-free WHOLE true surface to the fit (completion error), metres
@@ -109,6 +115,8 @@ struct RealSegment {
   QuadricType type = QuadricType::Invalid;    ///< type it is fitted as
   Eigen::Matrix3Xd points;                    ///< its points, metres
   std::string how;                            ///< how it was cut (documented in the report)
+  Eigen::Vector3d reference_axis = Eigen::Vector3d::Zero();  ///< direction the fitted axis should have (zero: none): vertical for poles, the table normal for the mug
+  bool reference_is_perpendicular = false;    ///< true: the axis should be perpendicular to reference_axis (facade normals are horizontal)
 };
 
 /// The real segments: the table scene's table plane and mug (as a cylinder), the lamppost's pole (as

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace quadrix {
 namespace {
@@ -84,6 +85,7 @@ FitterStudyOptions small_study() {
   options.trials = 2;
   options.points_per_segment = 300;
   options.real_data = false;
+  options.scan_segments = false;
   options.threads = 2;
   return options;
 }
@@ -119,6 +121,38 @@ TEST(FitterStudy, MeasuresExactFitsAsExactAndIsReproducible) {
       EXPECT_DOUBLE_EQ(first.rows[i].surface_rms, second.rows[i].surface_rms);
     }
   }
+}
+
+TEST(FitterStudy, FitsHeldApartScanSegmentsAndReportsThem) {
+  FitterStudyOptions options = small_study();
+  options.fitters = {"statistical", "taubin"};
+  options.automatic_type = false;
+  options.scan_segments = true;
+  options.scan_scene_scans = 1;
+  options.scan_object_scans = 5;
+  options.scan_segments_per_type = 3;
+  const FitterStudyResult result = run_fitter_study(options);
+  std::size_t scan_rows = 0;
+  std::vector<double> plane_axis_errors;
+  for (const auto& row : result.rows) {
+    if (row.source != "scan") continue;
+    ++scan_rows;
+    EXPECT_EQ(row.mode, "hint");
+    EXPECT_GT(row.visible_fraction, 0.0);
+    EXPECT_LE(row.visible_fraction, 1.0);
+    if (row.fitter == "statistical" && row.true_type == QuadricType::Plane) plane_axis_errors.push_back(row.axis_error_deg);
+  }
+  EXPECT_GT(scan_rows, 0u);
+  // A patch of a plane: its least-variance direction is close to the true normal.
+  ASSERT_FALSE(plane_axis_errors.empty());
+  std::sort(plane_axis_errors.begin(), plane_axis_errors.end());
+  EXPECT_LT(plane_axis_errors[plane_axis_errors.size() / 2], 10.0);
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "quadrix_test_fitter_study_scans";
+  std::filesystem::create_directories(folder);
+  write_fitter_study_markdown((folder / "fitters.md").string(), result, options, "quadrix compare-fitters --test");
+  const std::string markdown = read_text(folder / "fitters.md");
+  EXPECT_THAT(markdown, ::testing::HasSubstr("## Held-apart scan segments"));
+  EXPECT_THAT(markdown, ::testing::HasSubstr("### Where each fitter wins (scan segments)"));
 }
 
 TEST(FitterStudy, RejectsBadOptions) {
