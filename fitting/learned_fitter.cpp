@@ -197,6 +197,15 @@ class AutoFitter final : public QuadricFitter {
 
   QuadricFit fit(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, FitTypeHint hint) const override {
     const auto start = std::chrono::steady_clock::now();
+    const QuadricType type = hint.value_or(options_.learned.automatic_type);
+    if (std::find(options_.learned_types.begin(), options_.learned_types.end(), type) == options_.learned_types.end()) {
+      QuadricFit chosen = statistical_->fit(points, normals, hint);
+      const std::string detail = chosen.message.empty() ? "" : "; statistical: " + chosen.message;
+      chosen.message = "auto: statistical fit used (the learned fitter is not tried for " + quadric_type_name(type) +
+                       ": it does not beat the statistical fit on held-apart scan segments)" + detail;
+      chosen.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      return chosen;
+    }
     QuadricFit learned = learned_->fit(points, normals, hint);
     // The policy needs f_p2s even when the caller skips residuals: then it is read on the default subsample.
     if (learned.status == FitStatus::Ok && learned.residual_evaluation == ResidualEvaluation::Skip) {
@@ -235,6 +244,12 @@ class AutoFitter final : public QuadricFitter {
 };
 
 }  // namespace
+
+std::vector<QuadricType> default_auto_learned_types() {
+  // Planes and lines are left to the statistical fit: its least- and largest-variance directions are
+  // more accurate on scan segments, and a max-pooled network is pulled by outliers on lines.
+  return {QuadricType::Sphere, QuadricType::CircularCylinder, QuadricType::CircularCone, QuadricType::Ellipsoid};
+}
 
 std::string default_learned_fitter_directory() {
   const char* variable = std::getenv(kLearnedFitterDirectoryVariable);

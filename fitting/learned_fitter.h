@@ -90,16 +90,22 @@ struct LearnedFitterOptions {
 /// a message listing the trained types.
 std::unique_ptr<QuadricFitter> make_learned_fitter(const LearnedFitterOptions& options = {});
 
+/// Types whose learned fit `auto` tries first by default: those where the learned fitter beat the
+/// statistical one on held-apart scan segments (papers/studies/fitters.md, docs/modelling.md).
+std::vector<QuadricType> default_auto_learned_types();
+
 /// Options of the auto fitter (paper §"Quadric Fitting": learned first, statistical fallback).
 struct AutoFitterOptions {
   double delta_p = 0.5;                    ///< delta_p: learned fit rejected when its f_p2s exceeds this (paper)
+  std::vector<QuadricType> learned_types = default_auto_learned_types();  ///< types tried with the learned fitter first; others go straight to the statistical fit
   LearnedFitterOptions learned;            ///< options of the learned fitter tried first
   StatisticalFitterOptions statistical;    ///< options of the statistical fallback
 };
 
-/// The paper's policy: the learned fit unless it failed or f_p2s (unit_space_algebraic_distance)
-/// exceeds delta_p, else the statistical fit. QuadricFit::message names the fitter used and why;
-/// statistics always come from the statistical fit.
+/// The paper's policy, restricted to the types where it pays: for a type in learned_types, the
+/// learned fit unless it failed or f_p2s (unit_space_algebraic_distance) exceeds delta_p, else the
+/// statistical fit; other types get the statistical fit. QuadricFit::message names the fitter used
+/// and why.
 std::unique_ptr<QuadricFitter> make_auto_fitter(const AutoFitterOptions& options = {});
 
 }  // namespace quadrix

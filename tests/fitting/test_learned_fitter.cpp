@@ -273,12 +273,12 @@ TEST_P(LearnedFitterAccuracy, CleanFullSegmentsWithinHeldOutBounds) {
 INSTANTIATE_TEST_SUITE_P(
     TrainedTypes, LearnedFitterAccuracy,
     // Held-out clean full p90 of the committed weights (1000 segments per type), rounded up.
-    ::testing::Values(AccuracyBound{QuadricType::Plane, 0.13, 0.0, 0.00058},
-                      AccuracyBound{QuadricType::Line, 0.68, 0.0, 0.011},
-                      AccuracyBound{QuadricType::Sphere, 0.0, 0.0083, 0.079},
-                      AccuracyBound{QuadricType::CircularCylinder, 26.0, 0.23, 0.069},
-                      AccuracyBound{QuadricType::CircularCone, 22.0, 0.36, 2.0},
-                      AccuracyBound{QuadricType::Ellipsoid, 0.0, 1.3, 0.083}),
+    ::testing::Values(AccuracyBound{QuadricType::Plane, 0.86, 0.0, 0.0017},
+                      AccuracyBound{QuadricType::Line, 0.75, 0.0, 0.022},
+                      AccuracyBound{QuadricType::Sphere, 0.0, 0.0024, 0.023},
+                      AccuracyBound{QuadricType::CircularCylinder, 13.9, 0.091, 0.114},
+                      AccuracyBound{QuadricType::CircularCone, 11.1, 0.198, 1.07},
+                      AccuracyBound{QuadricType::Ellipsoid, 0.0, 1.1, 0.066}),
     [](const auto& info) { return quadric_type_name(info.param.type); });
 
 // ---------------------------------------------------------------------------------------------
@@ -475,10 +475,13 @@ TEST_F(LearnedFitterFiles, BrokenManifestIsNamed) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The auto policy: learned first, statistical when f_p2s > delta_p (paper §"Quadric Fitting").
+// The auto policy: learned first for learned_types, statistical when f_p2s > delta_p (paper
+// §"Quadric Fitting"); other types go straight to the statistical fit.
 
 TEST(AutoFitter, UsesTheLearnedFitWhenItsAlgebraicDistanceIsSmall) {
-  const auto automatic = make_quadric_fitter("auto");
+  AutoFitterOptions options;
+  options.learned_types = trained_types();
+  const auto automatic = make_auto_fitter(options);
   const auto learned = make_quadric_fitter("learned");
   EXPECT_EQ(automatic->name(), "auto");
   std::mt19937_64 random(44);
@@ -499,6 +502,7 @@ TEST(AutoFitter, FallsBackToStatisticalAboveDeltaP) {
   const Segment segment = clean_full_segment(QuadricType::Sphere, 1000, random);
   const QuadricFit statistical = make_statistical_fitter()->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::Sphere);
   AutoFitterOptions options;
+  options.learned_types = trained_types();
   options.delta_p = -1.0;  // every learned f_p2s (>= 0) exceeds it
   const QuadricFit fit = make_auto_fitter(options)->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::Sphere);
   EXPECT_EQ(fit.status, FitStatus::Ok);
@@ -508,7 +512,9 @@ TEST(AutoFitter, FallsBackToStatisticalAboveDeltaP) {
 
   // Out of distribution for the paper's default delta_p: a plane network asked to fit a sphere.
   const QuadricFit wrong = make_learned_fitter()->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::Plane);
-  const QuadricFit policy = make_auto_fitter()->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::Plane);
+  AutoFitterOptions paper;
+  paper.learned_types = trained_types();
+  const QuadricFit policy = make_auto_fitter(paper)->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::Plane);
   if (wrong.algebraic_distance > 0.5)
     EXPECT_THAT(policy.message, HasSubstr("auto: statistical fit used"));
   else
@@ -518,11 +524,26 @@ TEST(AutoFitter, FallsBackToStatisticalAboveDeltaP) {
 TEST(AutoFitter, FallsBackToStatisticalForTypesWithoutANetwork) {
   std::mt19937_64 random(46);
   const Segment segment = clean_full_segment(QuadricType::CircularCylinder, 500, random);
-  const QuadricFit fit = make_auto_fitter()->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::EllipticCylinder);
+  AutoFitterOptions options;
+  options.learned_types = {QuadricType::EllipticCylinder};  // tried first, but no network was trained for it
+  const QuadricFit fit = make_auto_fitter(options)->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::EllipticCylinder);
   EXPECT_EQ(fit.status, FitStatus::Ok);
   EXPECT_EQ(fit.type, QuadricType::EllipticCylinder);
   EXPECT_THAT(fit.message, HasSubstr("auto: statistical fit used (learned fit failed: "));
   EXPECT_THAT(fit.message, HasSubstr("no network for type elliptic_cylinder"));
+}
+
+TEST(AutoFitter, GoesStraightToStatisticalForTypesNotInLearnedTypes) {
+  std::mt19937_64 random(47);
+  const Segment segment = clean_full_segment(QuadricType::CircularCylinder, 500, random);
+  const QuadricFit statistical =
+      make_statistical_fitter()->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::CircularCylinder);
+  AutoFitterOptions options;
+  options.learned_types = {QuadricType::Sphere};
+  const QuadricFit fit = make_auto_fitter(options)->fit(segment.points, Eigen::Matrix3Xd(), QuadricType::CircularCylinder);
+  EXPECT_EQ(fit.status, FitStatus::Ok);
+  EXPECT_THAT(fit.message, HasSubstr("auto: statistical fit used (the learned fitter is not tried for circular_cylinder"));
+  EXPECT_EQ(fit.quadric.matrix(), statistical.quadric.matrix());
 }
 
 }  // namespace
