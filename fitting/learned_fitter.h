@@ -1,10 +1,12 @@
 // The learned quadric fitter (paper §"Quadric Fitting": QuadricsNet learns the canonical C and the
 // pose P separately and combines them into Q = P^-T C P^-1, Eq. (Q=PCP)) and the paper's `auto`
-// policy (learned first; the statistical fit when f_p2s of the learned one exceeds delta_p).
+// policy (learned first; the statistical fit when f_p2s of the learned one exceeds delta_p), here
+// applied only to the types where the learned fit measured better (docs/learned_fitter.md).
 //
 // One small PointNet per type (plane, line, sphere, circular cylinder, circular cone, ellipsoid),
-// trained by fitting/training/train_learned_fitter.py (`make train-fitter`) on synthetic partial,
-// noisy segments, exported as .npy tensors + manifest.json, and evaluated here with Eigen only.
+// trained by fitting/training/train_learned_fitter.py (`make train-fitter`) on segments cut from
+// simulated scans plus analytic partial, noisy segments, exported as .npy tensors + manifest.json,
+// and evaluated here with Eigen only.
 #pragma once
 
 #include "fitting/neural_network.h"
