@@ -437,7 +437,8 @@ std::vector<ScanSegment> make_scan_segments(const ScanSegmentOptions& options) {
 
 namespace {
 
-/// A little-endian C-order .npy (version 1.0) of `values` with the given shape and dtype descr.
+/// A C-order .npy (version 1.0) of raw host bytes with the given shape and dtype descr; the descrs
+/// used here say little-endian, which every supported host (x86-64, AArch64) is.
 void write_npy(const std::string& path, const char* descr, const std::vector<std::size_t>& shape, const void* data,
                std::size_t bytes) {
   std::string dims;
