@@ -22,18 +22,6 @@ std::string bin_name(const std::pair<double, double>& bin) {
   return name.str();
 }
 
-std::string three_digit(std::size_t value) {
-  char buffer[16];
-  std::snprintf(buffer, sizeof(buffer), "%03zu", value);
-  return buffer;
-}
-
-std::string fixed_text(double value, int decimals) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
-  return buffer;
-}
-
 void check_options(const LoopClosureSetOptions& options) {
   if (options.streets < 1) throw Error("loop-closure set: streets must be at least 1, got " + std::to_string(options.streets));
   if (options.pairs_per_bin < 1)
@@ -50,8 +38,8 @@ void write_used_scans(const std::filesystem::path& root, const std::string& fold
   std::filesystem::create_directories(root / folder);
   for (std::size_t i = 0; i < run.scans.size(); ++i) {
     if (!used[i]) continue;
-    write_point_cloud((root / (folder + "/scan_" + three_digit(i) + ".ply")).string(), run.scans[i].cloud);
-    write_pose_matrix((root / (folder + "/pose_" + three_digit(i) + ".txt")).string(), run.scans[i].sensor_pose);
+    write_point_cloud((root / (folder + "/scan_" + three_digits(i) + ".ply")).string(), run.scans[i].cloud);
+    write_pose_matrix((root / (folder + "/pose_" + three_digits(i) + ".txt")).string(), run.scans[i].sensor_pose);
   }
 }
 
@@ -93,11 +81,11 @@ std::vector<LoopClosureSetPair> write_loop_closure_set(const std::string& direct
         const auto [s, t] = candidates[k];
         const Eigen::Isometry3d truth = relative_transform(first.poses[t], second.poses[s]);
         LoopClosureSetPair pair;
-        pair.id = "street" + std::to_string(seed) + "_p2_" + three_digit(s) + "_to_p1_" + three_digit(t);
-        pair.source = source_folder + "/scan_" + three_digit(s) + ".ply";
-        pair.target = target_folder + "/scan_" + three_digit(t) + ".ply";
+        pair.id = "street" + std::to_string(seed) + "_p2_" + three_digits(s) + "_to_p1_" + three_digits(t);
+        pair.source = source_folder + "/scan_" + three_digits(s) + ".ply";
+        pair.target = target_folder + "/scan_" + three_digits(t) + ".ply";
         source_used[s] = target_used[t] = true;
-        pair.truth = street_folder + "/T_p1_" + three_digit(t) + "_from_p2_" + three_digit(s) + ".txt";
+        pair.truth = street_folder + "/T_p1_" + three_digits(t) + "_from_p2_" + three_digits(s) + ".txt";
         pair.bin = bin_name(options.bins[b]);
         pair.distance = truth.translation().norm();
         pair.rotation = std::acos(std::clamp((truth.linear().trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / kPi;
@@ -112,7 +100,7 @@ std::vector<LoopClosureSetPair> write_loop_closure_set(const std::string& direct
     out << "id\tsource\ttarget\tgt\tgt_quality\tsensor\tkind\tt_m\trot_deg\n";
     for (const LoopClosureSetPair& pair : pairs)
       out << pair.id << '\t' << pair.source << '\t' << pair.target << '\t' << pair.truth << "\texact\t" << options.sensor
-          << '\t' << pair.bin << '\t' << fixed_text(pair.distance, 2) << '\t' << fixed_text(pair.rotation, 1) << '\n';
+          << '\t' << pair.bin << '\t' << decimal_text(pair.distance, 2) << '\t' << decimal_text(pair.rotation, 1) << '\n';
   });
   return pairs;
 }

@@ -41,18 +41,6 @@ ordered_json matrix_json(const Eigen::Matrix4d& matrix) {
   return rows;
 }
 
-std::string three_digits(std::size_t index) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%03zu", index);
-  return buffer;
-}
-
-std::string fixed(double value, int decimals) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
-  return buffer;
-}
-
 Eigen::Isometry3d pose_from_angles(const std::vector<double>& values) {
   const double to_radians = kPi / 180.0;
   const double yaw = values[3] * to_radians;
@@ -117,6 +105,18 @@ void write_text(const std::string& path, const std::string& text) {
 }
 
 }  // namespace
+
+std::string three_digits(std::size_t index) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%03zu", index);
+  return buffer;
+}
+
+std::string decimal_text(double value, int decimals) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
+  return buffer;
+}
 
 std::vector<Eigen::Isometry3d> parse_pose_spec(const std::string& spec) {
   std::vector<Eigen::Isometry3d> poses;
@@ -291,7 +291,7 @@ ordered_json write_pairs(const std::filesystem::path& root, const SyntheticRun& 
                        {"rotation_deg", tidy(rotation_deg)}});
       tsv << run.scene.name << "_" << run.sensor.name << "_" << three_digits(source) << "_to_" << three_digits(target)
           << '\t' << source_cloud << '\t' << target_cloud << '\t' << path << "\texact\t" << run.sensor.name
-          << "\tsynthetic\t" << fixed(translation, 2) << '\t' << fixed(rotation_deg, 1) << '\n';
+          << "\tsynthetic\t" << decimal_text(translation, 2) << '\t' << decimal_text(rotation_deg, 1) << '\n';
     }
   }
   write_text((root / "pairs.tsv").string(), tsv.str());

@@ -15,6 +15,11 @@
 
 namespace quadrix {
 
+/// A scan index as the file names of a synthetic folder write it: three digits, zero-padded ("007").
+std::string three_digits(std::size_t index);
+/// `value` with exactly `decimals` digits after the point, as pairs.tsv writes distances and angles.
+std::string decimal_text(double value, int decimals);
+
 /// Parses a POSE_SPEC (sensor -> world poses in the scene's world frame, z up, metres, degrees):
 /// either inline entries "x,y,z,yaw_deg[,pitch_deg[,roll_deg]]" separated by ';' (rotation
 /// Rz(yaw) Ry(pitch) Rx(roll)), or the path of a text file with one pose a line: the same 4 to 6
