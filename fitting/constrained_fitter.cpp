@@ -552,6 +552,128 @@ bool is_supported(QuadricType type) {
   return std::find(types.begin(), types.end(), type) != types.end();
 }
 
+// ---- Stages of a typed fit -------------------------------------------------------------------
+
+/// Marks `result` when the type has no model here or there are too few points for it; throws on NaN or infinite points.
+bool accept_input(const Eigen::Matrix3Xd& points, QuadricType type, QuadricFit& result) {
+  if (!is_supported(type)) {
+    result.status = FitStatus::Failed;
+    result.message = "the constrained fitter has no model for a " + quadric_type_name(type);
+    return false;
+  }
+  if (static_cast<std::size_t>(points.cols()) < minimum_points_for_type(type)) {
+    result.status = FitStatus::TooFewPoints;
+    result.message = "a " + quadric_type_name(type) + " needs at least " + std::to_string(minimum_points_for_type(type)) +
+                     " points, got " + std::to_string(points.cols());
+    return false;
+  }
+  if (!points.allFinite()) throw Error("constrained fitter: the points contain NaN or infinite coordinates");
+  return true;
+}
+
+/// Point, line and plane: the orthogonal-distance minimiser is closed-form (centroid; total least
+/// squares line and plane through the centroid), which is exactly the statistical fitter's answer.
+QuadricFit fit_linear_type(const Eigen::Matrix3Xd& points, QuadricType type, const FitEvaluationOptions& evaluation) {
+  StatisticalFitterOptions linear_options;
+  linear_options.evaluation = evaluation;
+  QuadricFit linear = make_statistical_fitter(linear_options)->fit(points, Eigen::Matrix3Xd(), type);
+  if (linear.status == FitStatus::Ok && type == QuadricType::Point) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = linear.statistics.center;
+    linear.quadric = Quadric::from_canonical(QuadricType::Point, Eigen::Vector3d::Ones(), pose);
+    evaluate_fit(points, linear, {}, evaluation);
+  }
+  return linear;
+}
+
+/// The points centred on their mean and divided by their RMS radius, with their principal axes.
+struct UnitSpace {
+  Eigen::Vector3d mean;        ///< centroid in metres
+  double radius = 0.0;         ///< RMS distance to the centroid in metres
+  Eigen::Matrix3Xd unit;       ///< the points in unit space
+  Eigen::Matrix3d principal;   ///< principal axes, descending variance, right-handed
+  Eigen::Vector3d sigma;       ///< standard deviation along each principal axis
+};
+
+/// Finds the principal axes of unit-space points (descending variance, right-handed) and the spread along each.
+void find_principal_axes(UnitSpace& space) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(space.unit * space.unit.transpose() /
+                                                       static_cast<double>(space.unit.cols()));
+  space.principal << eigen.eigenvectors().col(2), eigen.eigenvectors().col(1), eigen.eigenvectors().col(0);
+  if (space.principal.determinant() < 0.0) space.principal.col(2) *= -1.0;
+  space.sigma = eigen.eigenvalues().reverse().cwiseMax(0.0).cwiseSqrt();
+}
+
+/// Marks `result` Degenerate when the spread cannot fix the type: collinear points, or coplanar ones but for a cylinder.
+bool accept_spread(const Eigen::Vector3d& sigma, QuadricType type, QuadricFit& result) {
+  if (sigma(1) <= 1e-9 * sigma(0)) {
+    result.status = FitStatus::Degenerate;
+    result.message = "the points are collinear; a " + quadric_type_name(type) + " is not determined";
+    return false;
+  }
+  if (sigma(2) <= 1e-9 * sigma(0) && type != QuadricType::CircularCylinder && type != QuadricType::EllipticCylinder) {
+    result.status = FitStatus::Degenerate;
+    result.message = "the points are coplanar; a " + quadric_type_name(type) + " through them is not unique";
+    return false;
+  }
+  return true;
+}
+
+/// Moves the points into unit space for conditioning; nothing (`result` Degenerate) when they cannot fix the type.
+std::optional<UnitSpace> move_to_unit_space(const Eigen::Matrix3Xd& points, QuadricType type, QuadricFit& result) {
+  UnitSpace space;
+  space.mean = points.rowwise().mean();
+  space.radius = std::sqrt((points.colwise() - space.mean).colwise().squaredNorm().mean());
+  result.statistics = point_statistics(points);
+  if (!(space.radius > 0.0)) {
+    result.status = FitStatus::Degenerate;
+    result.message = "all points coincide";
+    return std::nullopt;
+  }
+  space.unit = (points.colwise() - space.mean) / space.radius;
+  find_principal_axes(space);
+  if (!accept_spread(space.sigma, type, result)) return std::nullopt;
+  return space;
+}
+
+/// The evenly strided subsample the initial values are solved on (unused when there are few points: all are used).
+struct Subsample {
+  bool used = false;        ///< false: the subsample would be every point
+  Eigen::Matrix3Xd points;  ///< the subsample in metres (empty when unused)
+  Eigen::Matrix3Xd unit;    ///< the subsample in unit space (empty when unused)
+};
+
+/// Takes an evenly strided subsample of at most `subsample_points` points, in metres and in unit space.
+Subsample take_subsample(const Eigen::Matrix3Xd& points, const UnitSpace& space, int subsample_points) {
+  const ResidualSample coarse =
+      residual_sample(points.cols(), FitEvaluationOptions{ResidualEvaluation::Subsample, std::max(subsample_points, 1)});
+  Subsample sample;
+  sample.used = coarse.count < points.cols();
+  if (!sample.used) return sample;
+  sample.points = Eigen::Matrix3Xd(Eigen::Map<const Eigen::Matrix3Xd, 0, Eigen::OuterStride<>>(
+      points.data(), 3, coarse.count, Eigen::OuterStride<>(3 * coarse.stride)));
+  sample.unit = Eigen::Matrix3Xd((sample.points.colwise() - space.mean) / space.radius);
+  return sample;
+}
+
+/// Whether a Ceres solve ended with a finite cost and finite parameters.
+bool is_usable(const Solution& solution) {
+  return solution.termination != ceres::FAILURE && solution.termination != ceres::USER_FAILURE &&
+         std::isfinite(solution.cost) && solution.shape.scale.allFinite() && solution.shape.center.allFinite();
+}
+
+/// Brings the unit-space shape back to metres and into Q = P^-T C P^-1 (paper Eq. (Q=PCP)).
+Quadric to_metric_quadric(QuadricType type, const CanonicalShape& shape, const UnitSpace& space) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = shape.rotation;
+  pose.translation() = space.mean + space.radius * shape.center;
+  Eigen::Vector3d scale = shape.scale;
+  if (!is_cone(type)) scale *= space.radius;
+  if (type == QuadricType::CircularCylinder || type == QuadricType::EllipticCylinder) scale(2) = 1.0;
+  if (is_cone(type)) scale(2) = 1.0;
+  return Quadric::from_canonical(type, scale, pose);
+}
+
 class ConstrainedFitter final : public QuadricFitter {
  public:
   explicit ConstrainedFitter(const ConstrainedFitterOptions& options) : options_(options) {}
@@ -596,86 +718,55 @@ class ConstrainedFitter final : public QuadricFitter {
     return best;
   }
 
+  /// Fits one type: checks the input, solves from every initial value in unit space, keeps the best sound shape.
   QuadricFit fit_type(const Eigen::Matrix3Xd& points, QuadricType type, const FitEvaluationOptions& evaluation) const {
     QuadricFit result;
     result.type = type;
-    if (!is_supported(type)) {
-      result.status = FitStatus::Failed;
-      result.message = "the constrained fitter has no model for a " + quadric_type_name(type);
-      return result;
-    }
-    if (static_cast<std::size_t>(points.cols()) < minimum_points_for_type(type)) {
-      result.status = FitStatus::TooFewPoints;
-      result.message = "a " + quadric_type_name(type) + " needs at least " + std::to_string(minimum_points_for_type(type)) +
-                       " points, got " + std::to_string(points.cols());
-      return result;
-    }
-    if (!points.allFinite()) throw Error("constrained fitter: the points contain NaN or infinite coordinates");
-    // Point, line and plane: the orthogonal-distance minimiser is closed-form (centroid; total least
-    // squares line and plane through the centroid), which is exactly the statistical fitter's answer.
-    if (type == QuadricType::Point || type == QuadricType::Line || type == QuadricType::Plane) {
-      StatisticalFitterOptions linear_options;
-      linear_options.evaluation = evaluation;
-      QuadricFit linear = make_statistical_fitter(linear_options)->fit(points, Eigen::Matrix3Xd(), type);
-      if (linear.status == FitStatus::Ok && type == QuadricType::Point) {
-        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-        pose.translation() = linear.statistics.center;
-        linear.quadric = Quadric::from_canonical(QuadricType::Point, Eigen::Vector3d::Ones(), pose);
-        evaluate_fit(points, linear, {}, evaluation);
-      }
-      return linear;
-    }
-
-    // Unit space.
-    const Eigen::Vector3d mean = points.rowwise().mean();
-    const double radius = std::sqrt((points.colwise() - mean).colwise().squaredNorm().mean());
-    result.statistics = point_statistics(points);
-    if (!(radius > 0.0)) {
-      result.status = FitStatus::Degenerate;
-      result.message = "all points coincide";
-      return result;
-    }
-    const Eigen::Matrix3Xd unit = (points.colwise() - mean) / radius;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(unit * unit.transpose() / static_cast<double>(unit.cols()));
-    // Descending variance, right-handed.
-    Eigen::Matrix3d principal;
-    principal << eigen.eigenvectors().col(2), eigen.eigenvectors().col(1), eigen.eigenvectors().col(0);
-    if (principal.determinant() < 0.0) principal.col(2) *= -1.0;
-    const Eigen::Vector3d sigma = eigen.eigenvalues().reverse().cwiseMax(0.0).cwiseSqrt();
-    if (sigma(1) <= 1e-9 * sigma(0)) {
-      result.status = FitStatus::Degenerate;
-      result.message = "the points are collinear; a " + quadric_type_name(type) + " is not determined";
-      return result;
-    }
-    if (sigma(2) <= 1e-9 * sigma(0) && type != QuadricType::CircularCylinder && type != QuadricType::EllipticCylinder) {
-      result.status = FitStatus::Degenerate;
-      result.message = "the points are coplanar; a " + quadric_type_name(type) + " through them is not unique";
-      return result;
-    }
-
+    if (!accept_input(points, type, result)) return result;
+    if (type == QuadricType::Point || type == QuadricType::Line || type == QuadricType::Plane)
+      return fit_linear_type(points, type, evaluation);
+    const std::optional<UnitSpace> space = move_to_unit_space(points, type, result);
+    if (!space) return result;
     // Every initial value is solved on an evenly strided subsample (all points when there are few);
     // the best one is then polished on every point.
-    const ResidualSample coarse = residual_sample(
-        points.cols(), FitEvaluationOptions{ResidualEvaluation::Subsample, std::max(options_.subsample_points, 1)});
-    const bool subsampled = coarse.count < points.cols();
-    const Eigen::Matrix3Xd coarse_points =
-        subsampled ? Eigen::Matrix3Xd(Eigen::Map<const Eigen::Matrix3Xd, 0, Eigen::OuterStride<>>(
-                                          points.data(), 3, coarse.count, Eigen::OuterStride<>(3 * coarse.stride)))
-                   : Eigen::Matrix3Xd();
-    const Eigen::Matrix3Xd coarse_unit = subsampled ? Eigen::Matrix3Xd((coarse_points.colwise() - mean) / radius) : Eigen::Matrix3Xd();
-    const Eigen::Matrix3Xd& start_unit = subsampled ? coarse_unit : unit;
-    std::optional<CanonicalShape> taubin;
-    if (options_.use_taubin_initialisation) taubin = taubin_guess(subsampled ? coarse_points : points, type, mean, radius);
-    const std::vector<CanonicalShape> guesses = initial_values(type, start_unit, principal, sigma, taubin);
+    const Subsample coarse = take_subsample(points, *space, options_.subsample_points);
+    const std::vector<CanonicalShape> guesses = guess_initial_values(points, type, *space, coarse);
     if (guesses.empty()) {
       result.status = FitStatus::Degenerate;
       result.message = "no initial value for a " + quadric_type_name(type) + " (the points do not resemble one)";
       return result;
     }
-    const auto usable = [](const Solution& solution) {
-      return solution.termination != ceres::FAILURE && solution.termination != ceres::USER_FAILURE &&
-             std::isfinite(solution.cost) && solution.shape.scale.allFinite() && solution.shape.center.allFinite();
-    };
+    const std::optional<Solution> best = solve_from_best_guess(type, guesses, *space, coarse);
+    if (!best) {
+      result.status = FitStatus::Failed;
+      result.message = "every Ceres solve failed for the " + quadric_type_name(type);
+      return result;
+    }
+    const Eigen::Matrix3Xd& start_unit = coarse.used ? coarse.unit : space->unit;
+    if (type == QuadricType::CircularCylinder && !accept_cylinder_curvature(start_unit, best->shape, space->radius, result))
+      return result;
+    if (!accept_shape_scale(type, best->shape, space->radius, result)) return result;
+    result.quadric = to_metric_quadric(type, best->shape, *space);
+    result.status = best->termination == ceres::CONVERGENCE ? FitStatus::Ok : FitStatus::NotConverged;
+    if (result.status == FitStatus::NotConverged) result.message = "Ceres stopped early: " + best->message;
+    evaluate_fit(points, result, {}, evaluation);
+    return result;
+  }
+
+  /// Guesses the initial values from the principal axes (and Taubin's algebraic fit when enabled) on the subsample.
+  std::vector<CanonicalShape> guess_initial_values(const Eigen::Matrix3Xd& points, QuadricType type, const UnitSpace& space,
+                                                   const Subsample& coarse) const {
+    const Eigen::Matrix3Xd& start_unit = coarse.used ? coarse.unit : space.unit;
+    std::optional<CanonicalShape> taubin;
+    if (options_.use_taubin_initialisation)
+      taubin = taubin_guess(coarse.used ? coarse.points : points, type, space.mean, space.radius);
+    return initial_values(type, start_unit, space.principal, space.sigma, taubin);
+  }
+
+  /// Solves from every initial value, then the best one again to the full tolerances; nothing when every solve failed.
+  std::optional<Solution> solve_from_best_guess(QuadricType type, const std::vector<CanonicalShape>& guesses,
+                                                const UnitSpace& space, const Subsample& coarse) const {
+    const Eigen::Matrix3Xd& start_unit = coarse.used ? coarse.unit : space.unit;
     // Screening: every initial value gets a few iterations on the subsample; only the best one is
     // then solved to the full tolerances (on every point when polishing).
     const bool screen = guesses.size() > 1 && options_.screening_iterations > 0;
@@ -683,33 +774,37 @@ class ConstrainedFitter final : public QuadricFitter {
     screening.max_iterations = std::min(options_.screening_iterations, options_.max_iterations);
     std::optional<Solution> best;
     for (const CanonicalShape& guess : guesses) {
-      Solution solution = solve(type, start_unit, guess, screen ? screening : options_, radius);
-      if (usable(solution) && (!best || solution.cost < best->cost)) best = solution;
+      Solution solution = solve(type, start_unit, guess, screen ? screening : options_, space.radius);
+      if (is_usable(solution) && (!best || solution.cost < best->cost)) best = solution;
     }
-    if (!best) {
-      result.status = FitStatus::Failed;
-      result.message = "every Ceres solve failed for the " + quadric_type_name(type);
-      return result;
-    }
-    const bool polish = subsampled && options_.polish_on_all_points;
+    if (!best) return best;
+    const bool polish = coarse.used && options_.polish_on_all_points;
     if (screen || polish) {
-      Solution final_solution = solve(type, polish ? unit : start_unit, best->shape, options_, radius);
-      if (usable(final_solution)) best = final_solution;
+      Solution final_solution = solve(type, polish ? space.unit : start_unit, best->shape, options_, space.radius);
+      if (is_usable(final_solution)) best = final_solution;
     }
-    const CanonicalShape& shape = best->shape;
-    if (type == QuadricType::CircularCylinder) {
-      const auto [sagitta, rms] = cylinder_arc_sagitta(start_unit, shape);
-      if (sagitta < options_.minimum_sagitta_ratio * rms) {
-        result.status = FitStatus::Degenerate;
-        char text[220];
-        std::snprintf(text, sizeof(text),
-                      "the points do not show the cylinder's curvature: the sagitta of their arc (%.3g m at radius "
-                      "%.3g m) is below %.3g x the residual (%.3g m)",
-                      sagitta * radius, shape.scale(0) * radius, options_.minimum_sagitta_ratio, rms * radius);
-        result.message = text;
-        return result;
-      }
+    return best;
+  }
+
+  /// Marks `result` Degenerate when the arc's sagitta is below minimum_sagitta_ratio x the residual (no curvature).
+  bool accept_cylinder_curvature(const Eigen::Matrix3Xd& start_unit, const CanonicalShape& shape, double radius,
+                                 QuadricFit& result) const {
+    const auto [sagitta, rms] = cylinder_arc_sagitta(start_unit, shape);
+    if (sagitta < options_.minimum_sagitta_ratio * rms) {
+      result.status = FitStatus::Degenerate;
+      char text[220];
+      std::snprintf(text, sizeof(text),
+                    "the points do not show the cylinder's curvature: the sagitta of their arc (%.3g m at radius "
+                    "%.3g m) is below %.3g x the residual (%.3g m)",
+                    sagitta * radius, shape.scale(0) * radius, options_.minimum_sagitta_ratio, rms * radius);
+      result.message = text;
+      return false;
     }
+    return true;
+  }
+
+  /// Marks `result` Degenerate when a scale (or a cone's apex distance) runs away or a defined scale vanishes.
+  bool accept_shape_scale(QuadricType type, const CanonicalShape& shape, double radius, QuadricFit& result) const {
     const int defined = (type == QuadricType::Sphere || type == QuadricType::Ellipsoid) ? 3 : 2;
     const double largest = is_cone(type) ? std::max(shape.scale.head<2>().maxCoeff(), shape.center.norm())
                                          : shape.scale.head(defined).maxCoeff();
@@ -719,22 +814,9 @@ class ConstrainedFitter final : public QuadricFitter {
       result.message = "the best " + quadric_type_name(type) + " degenerates (scale or apex distance " +
                        std::to_string(largest * radius) + " m, smallest scale " + std::to_string(smallest) +
                        "): the points are nearly flat or straight";
-      return result;
+      return false;
     }
-
-    // Back to metres and into Q = P^-T C P^-1.
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = shape.rotation;
-    pose.translation() = mean + radius * shape.center;
-    Eigen::Vector3d scale = shape.scale;
-    if (!is_cone(type)) scale *= radius;
-    if (type == QuadricType::CircularCylinder || type == QuadricType::EllipticCylinder) scale(2) = 1.0;
-    if (is_cone(type)) scale(2) = 1.0;
-    result.quadric = Quadric::from_canonical(type, scale, pose);
-    result.status = best->termination == ceres::CONVERGENCE ? FitStatus::Ok : FitStatus::NotConverged;
-    if (result.status == FitStatus::NotConverged) result.message = "Ceres stopped early: " + best->message;
-    evaluate_fit(points, result, {}, evaluation);
-    return result;
+    return true;
   }
 
   ConstrainedFitterOptions options_;
