@@ -72,6 +72,59 @@ struct Detected {
   std::size_t inliers = 0;
 };
 
+/// Throws when the normals do not match the points one to one or a coordinate is NaN or infinite.
+void validate_input(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals) {
+  if (normals.cols() != 0 && normals.cols() != points.cols())
+    throw Error("cgal fitter: " + std::to_string(normals.cols()) + " normals given for " +
+                std::to_string(points.cols()) + " points (pass none or one per point)");
+  if (!points.allFinite()) throw Error("cgal fitter: the points contain NaN or infinite coordinates");
+}
+
+/// The fewest points a request can be fitted from (without a hint: 9, enough for any shape).
+std::size_t points_needed(FitTypeHint hint) {
+  return hint ? std::max<std::size_t>(minimum_points_for_type(*hint), 3) : 9;
+}
+
+/// Marks `result` when CGAL has no primitive for the requested type or there are too few points.
+bool accept_request(const Eigen::Matrix3Xd& points, FitTypeHint hint, QuadricFit& result) {
+  if (hint) {
+    const auto types = cgal_fitter_types();
+    if (std::find(types.begin(), types.end(), *hint) == types.end()) {
+      result.status = FitStatus::Failed;
+      result.message = "CGAL shape detection has no " + quadric_type_name(*hint) +
+                       " primitive (it detects planes, spheres, circular cylinders and circular cones)";
+      return false;
+    }
+  }
+  const std::size_t needed = points_needed(hint);
+  if (static_cast<std::size_t>(points.cols()) < needed) {
+    result.status = FitStatus::TooFewPoints;
+    result.message = "CGAL fitting needs at least " + std::to_string(needed) + " points, got " +
+                     std::to_string(points.cols());
+    return false;
+  }
+  return true;
+}
+
+/// Copies the points into CGAL's kernel.
+std::vector<Point3> to_cgal_points(const Eigen::Matrix3Xd& points) {
+  std::vector<Point3> cgal_points;
+  cgal_points.reserve(static_cast<std::size_t>(points.cols()));
+  for (Eigen::Index i = 0; i < points.cols(); ++i) cgal_points.emplace_back(points(0, i), points(1, i), points(2, i));
+  return cgal_points;
+}
+
+/// Chooses the shape factories for a request: the hinted type's, or all four without a hint.
+ShapeChoice choose_shapes(FitTypeHint hint) {
+  const QuadricType requested = hint.value_or(QuadricType::Invalid);
+  ShapeChoice choice;
+  choice.plane = !hint || requested == QuadricType::Plane;
+  choice.sphere = !hint || requested == QuadricType::Sphere;
+  choice.cylinder = !hint || requested == QuadricType::CircularCylinder;
+  choice.cone = !hint || requested == QuadricType::CircularCone;
+  return choice;
+}
+
 class CgalFitter final : public QuadricFitter {
  public:
   explicit CgalFitter(const CgalFitterOptions& options) : options_(options) {
@@ -93,65 +146,58 @@ class CgalFitter final : public QuadricFitter {
   }
 
  private:
+  /// Fits with CGAL: a point or line by least squares, every other type by Efficient RANSAC with growing epsilon.
   QuadricFit fit_points(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, FitTypeHint hint) const {
     QuadricFit result;
-    if (normals.cols() != 0 && normals.cols() != points.cols())
-      throw Error("cgal fitter: " + std::to_string(normals.cols()) + " normals given for " +
-                  std::to_string(points.cols()) + " points (pass none or one per point)");
-    if (!points.allFinite()) throw Error("cgal fitter: the points contain NaN or infinite coordinates");
+    validate_input(points, normals);
     const QuadricType requested = hint.value_or(QuadricType::Invalid);
     result.type = requested;
-    if (hint) {
-      const auto types = cgal_fitter_types();
-      if (std::find(types.begin(), types.end(), requested) == types.end()) {
-        result.status = FitStatus::Failed;
-        result.message = "CGAL shape detection has no " + quadric_type_name(requested) +
-                         " primitive (it detects planes, spheres, circular cylinders and circular cones)";
-        return result;
-      }
-    }
-    const std::size_t needed = hint ? std::max<std::size_t>(minimum_points_for_type(requested), 3) : 9;
-    if (static_cast<std::size_t>(points.cols()) < needed) {
-      result.status = FitStatus::TooFewPoints;
-      result.message = "CGAL fitting needs at least " + std::to_string(needed) + " points, got " +
-                       std::to_string(points.cols());
-      return result;
-    }
+    if (!accept_request(points, hint, result)) return result;
     result.statistics = statistical_pose(points);
-    std::vector<Point3> cgal_points;
-    cgal_points.reserve(static_cast<std::size_t>(points.cols()));
-    for (Eigen::Index i = 0; i < points.cols(); ++i) cgal_points.emplace_back(points(0, i), points(1, i), points(2, i));
-
+    const std::vector<Point3> cgal_points = to_cgal_points(points);
     if (hint && (requested == QuadricType::Point || requested == QuadricType::Line)) {
-      const Point3 centroid = CGAL::centroid(cgal_points.begin(), cgal_points.end());
-      if (requested == QuadricType::Point) {
-        result.quadric = Quadric::from_canonical(QuadricType::Point, Eigen::Vector3d::Ones(),
-                                                 make_pose(Eigen::Matrix3d::Identity(), to_eigen(centroid)));
-      } else {
-        if (result.statistics.scale(0) <= 0.0) {
-          result.status = FitStatus::Degenerate;
-          result.message = "all points coincide; a line is not determined";
-          return result;
-        }
-        Kernel::Line_3 line;
-        Point3 line_centroid;
-        CGAL::linear_least_squares_fitting_3(cgal_points.begin(), cgal_points.end(), line, line_centroid,
-                                             CGAL::Dimension_tag<0>());
-        result.quadric = Quadric::from_canonical(QuadricType::Line, Eigen::Vector3d::Ones(),
-                                                 make_pose(frame_with_axis(to_eigen(line.to_vector()), 2), to_eigen(line_centroid)));
-      }
-      result.status = FitStatus::Ok;
-      evaluate_fit(points, result, {}, options_.evaluation);
+      fit_by_least_squares(points, cgal_points, requested, result);
       return result;
     }
+    PointList with_normals = attach_normals(cgal_points, normals);
+    const Eigen::Vector3d lower = points.rowwise().minCoeff();
+    const Eigen::Vector3d upper = points.rowwise().maxCoeff();
+    const double diagonal = (upper - lower).norm();
+    if (!(diagonal > 0.0)) {
+      result.status = FitStatus::Degenerate;
+      result.message = "all points coincide";
+      return result;
+    }
+    detect_with_growing_epsilon(points, with_normals, hint, diagonal, result);
+    return result;
+  }
 
-    ShapeChoice choice;
-    choice.plane = !hint || requested == QuadricType::Plane;
-    choice.sphere = !hint || requested == QuadricType::Sphere;
-    choice.cylinder = !hint || requested == QuadricType::CircularCylinder;
-    choice.cone = !hint || requested == QuadricType::CircularCone;
+  /// Fits a point (the centroid) or a line (CGAL's least squares) and evaluates it.
+  void fit_by_least_squares(const Eigen::Matrix3Xd& points, const std::vector<Point3>& cgal_points,
+                            QuadricType requested, QuadricFit& result) const {
+    const Point3 centroid = CGAL::centroid(cgal_points.begin(), cgal_points.end());
+    if (requested == QuadricType::Point) {
+      result.quadric = Quadric::from_canonical(QuadricType::Point, Eigen::Vector3d::Ones(),
+                                               make_pose(Eigen::Matrix3d::Identity(), to_eigen(centroid)));
+    } else {
+      if (result.statistics.scale(0) <= 0.0) {
+        result.status = FitStatus::Degenerate;
+        result.message = "all points coincide; a line is not determined";
+        return;
+      }
+      Kernel::Line_3 line;
+      Point3 line_centroid;
+      CGAL::linear_least_squares_fitting_3(cgal_points.begin(), cgal_points.end(), line, line_centroid,
+                                           CGAL::Dimension_tag<0>());
+      result.quadric = Quadric::from_canonical(QuadricType::Line, Eigen::Vector3d::Ones(),
+                                               make_pose(frame_with_axis(to_eigen(line.to_vector()), 2), to_eigen(line_centroid)));
+    }
+    result.status = FitStatus::Ok;
+    evaluate_fit(points, result, {}, options_.evaluation);
+  }
 
-    // Points with normals: the caller's, else CGAL's jet estimate.
+  /// Pairs each point with a normal: the caller's, else CGAL's jet estimate.
+  PointList attach_normals(const std::vector<Point3>& cgal_points, const Eigen::Matrix3Xd& normals) const {
     PointList with_normals;
     with_normals.reserve(cgal_points.size());
     for (std::size_t i = 0; i < cgal_points.size(); ++i) {
@@ -168,65 +214,77 @@ class CgalFitter final : public QuadricFitter {
       CGAL::jet_estimate_normals<CGAL::Sequential_tag>(
           with_normals, neighbours, CGAL::parameters::point_map(PointMap()).normal_map(NormalMap()));
     }
-    const Eigen::Vector3d lower = points.rowwise().minCoeff();
-    const Eigen::Vector3d upper = points.rowwise().maxCoeff();
-    const double diagonal = (upper - lower).norm();
-    if (!(diagonal > 0.0)) {
-      result.status = FitStatus::Degenerate;
-      result.message = "all points coincide";
-      return result;
-    }
+    return with_normals;
+  }
 
-    // Detection with increasing epsilon until a shape covers minimum_coverage of the points.
+  /// Detects with increasing epsilon until a shape covers minimum_coverage of the points; Degenerate when none does.
+  void detect_with_growing_epsilon(const Eigen::Matrix3Xd& points, PointList& with_normals, FitTypeHint hint,
+                                   double diagonal, QuadricFit& result) const {
     const std::size_t minimum_points = std::max<std::size_t>(
-        needed, static_cast<std::size_t>(std::ceil(options_.minimum_coverage * static_cast<double>(points.cols()))));
+        points_needed(hint),
+        static_cast<std::size_t>(std::ceil(options_.minimum_coverage * static_cast<double>(points.cols()))));
+    const ShapeChoice choice = choose_shapes(hint);
     for (const double multiplier : options_.epsilon_multipliers) {
-      CGAL::get_default_random() = CGAL::Random(options_.seed);  // thread-local: reproducible, thread-safe
-      EfficientRansac ransac;
-      ransac.set_input(with_normals);
-      if (choice.plane) ransac.add_shape_factory<RansacPlane>();
-      if (choice.sphere) ransac.add_shape_factory<RansacSphere>();
-      if (choice.cylinder) ransac.add_shape_factory<RansacCylinder>();
-      if (choice.cone) ransac.add_shape_factory<RansacCone>();
-      EfficientRansac::Parameters parameters;  // every parameter set explicitly (DESIGN.md §5)
-      parameters.probability = options_.probability;
-      parameters.min_points = minimum_points;
-      parameters.epsilon = options_.epsilon_fraction * multiplier * diagonal;
-      parameters.cluster_epsilon = options_.cluster_epsilon_fraction * diagonal;
-      parameters.normal_threshold = options_.normal_threshold;
-      ransac.preprocess();
-      if (!ransac.detect(parameters)) continue;
-      Detected best;
-      for (const auto& shape : ransac.shapes()) {
-        const std::size_t inliers = shape->indices_of_assigned_points().size();
-        if (inliers < minimum_points || inliers <= best.inliers) continue;
-        Detected detected = convert(shape, with_normals);
-        if (detected.type == QuadricType::Invalid) continue;
-        best = std::move(detected);
-      }
+      const double epsilon = options_.epsilon_fraction * multiplier * diagonal;
+      const Detected best = detect_largest_shape(with_normals, choice, minimum_points, epsilon, diagonal);
       if (best.type == QuadricType::Invalid) continue;
-      result.quadric = best.quadric;
-      result.status = FitStatus::Ok;
-      evaluate_fit(points, result, {}, options_.evaluation);
-      if (result.status == FitStatus::Ok && hint && result.type != requested &&
-          !(requested == QuadricType::CircularCylinder && result.type == QuadricType::EllipticCylinder)) {
-        // Only possible through rounding of the rebuilt Q; report it rather than hide it.
-        result.status = FitStatus::TypeMismatch;
-        result.message = "asked for a " + quadric_type_name(requested) + ", the rebuilt quadric is a " +
-                         quadric_type_name(result.type);
-      }
-      result.message = result.message.empty()
-                           ? "epsilon " + std::to_string(parameters.epsilon) + " m, " + std::to_string(best.inliers) + " of " +
-                                 std::to_string(points.cols()) + " points on the shape"
-                           : result.message;
-      return result;
+      record_detection(points, best, hint, epsilon, result);
+      return;
     }
     result.status = FitStatus::Degenerate;
-    result.message = std::string("CGAL shape detection found no ") + (hint ? quadric_type_name(requested) : "shape") +
+    result.message = std::string("CGAL shape detection found no ") + (hint ? quadric_type_name(*hint) : "shape") +
                      " covering " + std::to_string(minimum_points) + " of " + std::to_string(points.cols()) +
                      " points (epsilon up to " +
                      std::to_string(options_.epsilon_fraction * options_.epsilon_multipliers.back() * diagonal) + " m)";
-    return result;
+  }
+
+  /// Runs Efficient RANSAC once and keeps the usable shape with the most inliers (Invalid type when there is none).
+  Detected detect_largest_shape(PointList& with_normals, const ShapeChoice& choice, std::size_t minimum_points,
+                                double epsilon, double diagonal) const {
+    CGAL::get_default_random() = CGAL::Random(options_.seed);  // thread-local: reproducible, thread-safe
+    EfficientRansac ransac;
+    ransac.set_input(with_normals);
+    if (choice.plane) ransac.add_shape_factory<RansacPlane>();
+    if (choice.sphere) ransac.add_shape_factory<RansacSphere>();
+    if (choice.cylinder) ransac.add_shape_factory<RansacCylinder>();
+    if (choice.cone) ransac.add_shape_factory<RansacCone>();
+    EfficientRansac::Parameters parameters;  // every parameter set explicitly (DESIGN.md §5)
+    parameters.probability = options_.probability;
+    parameters.min_points = minimum_points;
+    parameters.epsilon = epsilon;
+    parameters.cluster_epsilon = options_.cluster_epsilon_fraction * diagonal;
+    parameters.normal_threshold = options_.normal_threshold;
+    ransac.preprocess();
+    Detected best;
+    if (!ransac.detect(parameters)) return best;
+    for (const auto& shape : ransac.shapes()) {
+      const std::size_t inliers = shape->indices_of_assigned_points().size();
+      if (inliers < minimum_points || inliers <= best.inliers) continue;
+      Detected detected = convert(shape, with_normals);
+      if (detected.type == QuadricType::Invalid) continue;
+      best = std::move(detected);
+    }
+    return best;
+  }
+
+  /// Stores the detected quadric, evaluates it and says how it was found; flags a type the rebuilt Q did not keep.
+  void record_detection(const Eigen::Matrix3Xd& points, const Detected& best, FitTypeHint hint, double epsilon,
+                        QuadricFit& result) const {
+    const QuadricType requested = hint.value_or(QuadricType::Invalid);
+    result.quadric = best.quadric;
+    result.status = FitStatus::Ok;
+    evaluate_fit(points, result, {}, options_.evaluation);
+    if (result.status == FitStatus::Ok && hint && result.type != requested &&
+        !(requested == QuadricType::CircularCylinder && result.type == QuadricType::EllipticCylinder)) {
+      // Only possible through rounding of the rebuilt Q; report it rather than hide it.
+      result.status = FitStatus::TypeMismatch;
+      result.message = "asked for a " + quadric_type_name(requested) + ", the rebuilt quadric is a " +
+                       quadric_type_name(result.type);
+    }
+    result.message = result.message.empty()
+                         ? "epsilon " + std::to_string(epsilon) + " m, " + std::to_string(best.inliers) + " of " +
+                               std::to_string(points.cols()) + " points on the shape"
+                         : result.message;
   }
 
   /// Converts one detected primitive to its quadric (Invalid type when its parameters are unusable).
