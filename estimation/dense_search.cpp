@@ -162,6 +162,141 @@ std::string shift_name(double along, double across) {
   return name.str();
 }
 
+// The least-constrained translation at the answer, its share of the information, and the direction across it.
+struct WeakestAxes {
+  Eigen::Vector3d weakest;  // unit translation the target's normals constrain least
+  double share = 0.0;       // its information over the largest eigenvalue, [0, 1]
+  Eigen::Vector3d across;   // across it along the ground (without up: the middle eigenvector)
+};
+
+// Finds the weakest direction of the point-to-plane information at the answer, kept along the ground.
+WeakestAxes find_weakest_axes(const Linearisation& at_answer, const std::optional<Eigen::Vector3d>& up) {
+  // The weakest direction: the least-constrained translation of the point-to-plane information at
+  // the answer (its translation block is the sum of n nᵀ over the pairs), kept along the ground.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(at_answer.information.bottomRightCorner<3, 3>());
+  Eigen::Vector3d direction = solver.eigenvectors().col(0);
+  if (up && up->norm() > 0.0) {
+    // Restricted to the ground plane: the 2×2 information in an orthonormal basis orthogonal to up.
+    const Eigen::Vector3d u = up->normalized();
+    Eigen::Matrix<double, 3, 2> basis;
+    basis.col(0) = u.unitOrthogonal();
+    basis.col(1) = u.cross(basis.col(0));
+    const Eigen::Matrix2d along_ground = basis.transpose() * at_answer.information.bottomRightCorner<3, 3>() * basis;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ground_solver(along_ground);
+    direction = basis * ground_solver.eigenvectors().col(0);
+  }
+  WeakestAxes axes;
+  axes.weakest = direction.normalized();
+  const double largest = solver.eigenvalues()(2);
+  axes.share = largest > 0.0 ? (axes.weakest.transpose() * at_answer.information.bottomRightCorner<3, 3>() *
+                                axes.weakest)(0) / largest
+                             : 0.0;
+  axes.across = up && up->norm() > 0.0 ? Eigen::Vector3d(up->normalized().cross(axes.weakest).normalized())
+                                       : Eigen::Vector3d(solver.eigenvectors().col(1));
+  return axes;
+}
+
+// The starts of the search, each with the name its optimum reports.
+struct NamedStarts {
+  std::vector<Eigen::Isometry3d> transforms;
+  std::vector<std::string> names;
+};
+
+// Lays out the starts: a grid around the answer, then every other candidate, then the identity.
+NamedStarts lay_out_starts(const Eigen::Isometry3d& answer, const std::vector<Eigen::Isometry3d>& other_starts,
+                           const WeakestAxes& axes, const DenseSearchOptions& options) {
+  NamedStarts starts;
+  // A grid of starts: fine along the weakest direction, where the quadrics are least sure, and
+  // coarse across it (along the ground), so an answer that is also off sideways is still reached.
+  const long reach = static_cast<long>(std::floor(options.range / options.step + 1e-9));
+  const long across_reach = static_cast<long>(std::floor(options.across_range / options.across_step + 1e-9));
+  for (long j = -across_reach; j <= across_reach; ++j)
+    for (long k = -reach; k <= reach; ++k) {
+      const double along_shift = static_cast<double>(k) * options.step, across_shift = static_cast<double>(j) * options.across_step;
+      Eigen::Isometry3d start = answer;
+      start.pretranslate(along_shift * axes.weakest + across_shift * axes.across);
+      starts.transforms.push_back(start);
+      starts.names.push_back(shift_name(along_shift, across_shift));
+    }
+  for (std::size_t i = 0; i < other_starts.size(); ++i) {
+    starts.transforms.push_back(other_starts[i]);
+    starts.names.push_back("candidate " + std::to_string(i));
+  }
+  starts.transforms.push_back(Eigen::Isometry3d::Identity());
+  starts.names.push_back("identity");
+  return starts;
+}
+
+// Runs the first pass: every start gets half the iterations on a third of the samples.
+std::vector<DenseOptimum> run_coarse_pass(const PreparedPair& pair, const NamedStarts& starts,
+                                          const std::optional<Eigen::Vector4d>& source_ground,
+                                          const DenseSearchOptions& options) {
+  std::vector<DenseOptimum> optima(starts.transforms.size());
+  tbb::parallel_for(std::size_t(0), starts.transforms.size(), [&](std::size_t i) {
+    optima[i] = run_icp(pair, pair.coarse, starts.transforms[i], (options.iterations + 1) / 2, options);
+    optima[i].start = starts.names[i];
+    optima[i].overlap = covered_fraction(pair, pair.coarse, optima[i].transform, source_ground);
+  });
+  return optima;
+}
+
+// Chooses the optima to refine: within refine_band of the best coarse overlap, best first, at most max_refined.
+std::vector<std::size_t> choose_contenders(DenseSearchResult& result, const DenseSearchOptions& options) {
+  double best_coarse = 0.0;
+  for (const DenseOptimum& optimum : result.optima) best_coarse = std::max(best_coarse, optimum.overlap);
+  std::vector<std::size_t> contenders;
+  for (std::size_t i = 0; i < result.optima.size(); ++i)
+    if (result.optima[i].overlap >= best_coarse - options.refine_band) contenders.push_back(i);
+  // At most `max_refined`, the best first. Low-overlap pairs (nothing aligns) put every optimum in
+  // the band; the ones left out are counted, and the search then cannot settle.
+  std::stable_sort(contenders.begin(), contenders.end(),
+                   [&](std::size_t a, std::size_t b) { return result.optima[a].overlap > result.optima[b].overlap; });
+  if (contenders.size() > options.max_refined) {
+    result.unrefined_contenders = contenders.size() - options.max_refined;
+    contenders.resize(options.max_refined);
+  }
+  return contenders;
+}
+
+// Refines the contenders with the full iterations on all samples and scores them again.
+void refine_contenders(const PreparedPair& pair, const std::vector<std::size_t>& contenders,
+                       const std::optional<Eigen::Vector4d>& source_ground, const DenseSearchOptions& options,
+                       std::vector<DenseOptimum>& optima) {
+  tbb::parallel_for(std::size_t(0), contenders.size(), [&](std::size_t k) {
+    DenseOptimum& optimum = optima[contenders[k]];
+    const std::string start = optimum.start;
+    optimum = run_icp(pair, pair.source, optimum.transform, options.iterations, options);
+    optimum.start = start;
+    optimum.refined = true;
+    optimum.overlap = covered_fraction(pair, pair.source, optimum.transform, source_ground);
+  });
+}
+
+// Picks the highest overlap, its best rival that disagrees with it, and the margin between the two.
+void pick_best_and_rival(DenseSearchResult& result, double translation_disagreement,
+                         double rotation_disagreement_degrees) {
+  for (std::size_t i = 1; i < result.optima.size(); ++i)
+    if (result.optima[i].overlap > result.optima[result.best].overlap) result.best = i;
+  const Eigen::Isometry3d& best = result.optima[result.best].transform;
+  for (std::size_t i = 0; i < result.optima.size(); ++i) {
+    const bool disagrees = translation_error(result.optima[i].transform, best) > translation_disagreement ||
+                           rotation_error_degrees(result.optima[i].transform, best) > rotation_disagreement_degrees;
+    if (disagrees && (!result.rival || result.optima[i].overlap > result.optima[*result.rival].overlap)) result.rival = i;
+  }
+  result.margin = result.optima[result.best].overlap - (result.rival ? result.optima[*result.rival].overlap : 0.0);
+}
+
+// Whether `best` lies inside the grid of starts, one fine step in from its ends along the weakest direction.
+bool lies_inside_grid(const Eigen::Isometry3d& best, const Eigen::Isometry3d& answer, const WeakestAxes& axes,
+                      const DenseSearchOptions& options) {
+  // Beyond, a better optimum nobody started near may lie just outside, so the winner's
+  // margin over the optima found means little (on the 3DTK pair 2->1 started 10 m off, the grid's
+  // last start reaches a wrong optimum that beats the empty rest of the grid).
+  const Eigen::Vector3d moved = best.translation() - answer.translation();
+  return std::abs(moved.dot(axes.weakest)) <= options.range - options.step + 1e-9 &&
+         std::abs(moved.dot(axes.across)) <= options.across_range + 1e-9;
+}
+
 }  // namespace
 
 void validate_dense_search_options(const DenseSearchOptions& options) {
@@ -205,99 +340,19 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
   const PreparedPair pair = prepare(source, target, options);
   result.source_points = static_cast<std::size_t>(pair.source.cols());
   result.target_points = static_cast<std::size_t>(pair.target_index.points().cols());
-
-  // The weakest direction: the least-constrained translation of the point-to-plane information at
-  // the answer (its translation block is the sum of n nᵀ over the pairs), kept along the ground.
-  const Linearisation at_answer = linearise(pair, pair.source, answer, options.correspondence_distance);
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(at_answer.information.bottomRightCorner<3, 3>());
-  Eigen::Vector3d direction = solver.eigenvectors().col(0);
-  if (up && up->norm() > 0.0) {
-    // Restricted to the ground plane: the 2×2 information in an orthonormal basis orthogonal to up.
-    const Eigen::Vector3d u = up->normalized();
-    Eigen::Matrix<double, 3, 2> basis;
-    basis.col(0) = u.unitOrthogonal();
-    basis.col(1) = u.cross(basis.col(0));
-    const Eigen::Matrix2d along_ground = basis.transpose() * at_answer.information.bottomRightCorner<3, 3>() * basis;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ground_solver(along_ground);
-    direction = basis * ground_solver.eigenvectors().col(0);
-  }
-  result.weakest_direction = direction.normalized();
-  const double largest = solver.eigenvalues()(2);
-  result.weakest_share = largest > 0.0 ? (result.weakest_direction.transpose() * at_answer.information.bottomRightCorner<3, 3>() *
-                                          result.weakest_direction)(0) / largest
-                                       : 0.0;
-
-  std::vector<Eigen::Isometry3d> starts;
-  std::vector<std::string> names;
-  // A grid of starts: fine along the weakest direction, where the quadrics are least sure, and
-  // coarse across it (along the ground), so an answer that is also off sideways is still reached.
-  const Eigen::Vector3d across = up && up->norm() > 0.0 ? Eigen::Vector3d(up->normalized().cross(result.weakest_direction).normalized())
-                                                        : Eigen::Vector3d(solver.eigenvectors().col(1));
-  const long reach = static_cast<long>(std::floor(options.range / options.step + 1e-9));
-  const long across_reach = static_cast<long>(std::floor(options.across_range / options.across_step + 1e-9));
-  for (long j = -across_reach; j <= across_reach; ++j)
-    for (long k = -reach; k <= reach; ++k) {
-      const double along_shift = static_cast<double>(k) * options.step, across_shift = static_cast<double>(j) * options.across_step;
-      Eigen::Isometry3d start = answer;
-      start.pretranslate(along_shift * result.weakest_direction + across_shift * across);
-      starts.push_back(start);
-      names.push_back(shift_name(along_shift, across_shift));
-    }
-  for (std::size_t i = 0; i < other_starts.size(); ++i) {
-    starts.push_back(other_starts[i]);
-    names.push_back("candidate " + std::to_string(i));
-  }
-  starts.push_back(Eigen::Isometry3d::Identity());
-  names.push_back("identity");
-
+  const WeakestAxes axes = find_weakest_axes(linearise(pair, pair.source, answer, options.correspondence_distance), up);
+  result.weakest_direction = axes.weakest;
+  result.weakest_share = axes.share;
+  const NamedStarts starts = lay_out_starts(answer, other_starts, axes, options);
   // Two passes. Every start first gets half the iterations on a third of the samples. Only the
   // optima whose coarse overlap is within `refine_band` of the best are then refined on all samples
   // and scored again. The others are too far below to win or to decide the margin, so they keep
   // their coarse values (`refined` false). On the six KITTI loop closures (85 starts each) this picks
   // the same winners as one full-size pass in about a third of the time.
-  result.optima.resize(starts.size());
-  tbb::parallel_for(std::size_t(0), starts.size(), [&](std::size_t i) {
-    result.optima[i] = run_icp(pair, pair.coarse, starts[i], (options.iterations + 1) / 2, options);
-    result.optima[i].start = names[i];
-    result.optima[i].overlap = covered_fraction(pair, pair.coarse, result.optima[i].transform, source_ground);
-  });
-  double best_coarse = 0.0;
-  for (const DenseOptimum& optimum : result.optima) best_coarse = std::max(best_coarse, optimum.overlap);
-  std::vector<std::size_t> contenders;
-  for (std::size_t i = 0; i < result.optima.size(); ++i)
-    if (result.optima[i].overlap >= best_coarse - options.refine_band) contenders.push_back(i);
-  // At most `max_refined`, the best first. Low-overlap pairs (nothing aligns) put every optimum in
-  // the band; the ones left out are counted, and the search then cannot settle.
-  std::stable_sort(contenders.begin(), contenders.end(),
-                   [&](std::size_t a, std::size_t b) { return result.optima[a].overlap > result.optima[b].overlap; });
-  if (contenders.size() > options.max_refined) {
-    result.unrefined_contenders = contenders.size() - options.max_refined;
-    contenders.resize(options.max_refined);
-  }
-  tbb::parallel_for(std::size_t(0), contenders.size(), [&](std::size_t k) {
-    DenseOptimum& optimum = result.optima[contenders[k]];
-    const std::string start = optimum.start;
-    optimum = run_icp(pair, pair.source, optimum.transform, options.iterations, options);
-    optimum.start = start;
-    optimum.refined = true;
-    optimum.overlap = covered_fraction(pair, pair.source, optimum.transform, source_ground);
-  });
-  for (std::size_t i = 1; i < result.optima.size(); ++i)
-    if (result.optima[i].overlap > result.optima[result.best].overlap) result.best = i;
-  const Eigen::Isometry3d& best = result.optima[result.best].transform;
-  for (std::size_t i = 0; i < result.optima.size(); ++i) {
-    const bool disagrees = translation_error(result.optima[i].transform, best) > translation_disagreement ||
-                           rotation_error_degrees(result.optima[i].transform, best) > rotation_disagreement_degrees;
-    if (disagrees && (!result.rival || result.optima[i].overlap > result.optima[*result.rival].overlap)) result.rival = i;
-  }
-  result.margin = result.optima[result.best].overlap - (result.rival ? result.optima[*result.rival].overlap : 0.0);
-  // Whether the winner lies inside the grid, one fine step in from its ends along the weakest
-  // direction. Beyond, a better optimum nobody started near may lie just outside, so the winner's
-  // margin over the optima found means little (on the 3DTK pair 2->1 started 10 m off, the grid's
-  // last start reaches a wrong optimum that beats the empty rest of the grid).
-  const Eigen::Vector3d moved = best.translation() - answer.translation();
-  result.best_in_grid = std::abs(moved.dot(result.weakest_direction)) <= options.range - options.step + 1e-9 &&
-                        std::abs(moved.dot(across)) <= options.across_range + 1e-9;
+  result.optima = run_coarse_pass(pair, starts, source_ground, options);
+  refine_contenders(pair, choose_contenders(result, options), source_ground, options, result.optima);
+  pick_best_and_rival(result, translation_disagreement, rotation_disagreement_degrees);
+  result.best_in_grid = lies_inside_grid(result.optima[result.best].transform, answer, axes, options);
   return result;
 }
 
