@@ -259,6 +259,8 @@ class SearchWorker {
 
 // Greedy clique from each high-core vertex (PMC-style): repeatedly add the eligible candidate of
 // highest core (the lowest index in the renumbered graph). Returns false when the deadline passed.
+// The first start always runs to a maximal clique, deadline or not (one pass over a row at most per
+// added vertex): a search whose deadline expired during the ordering still returns a usable clique.
 bool greedy_clique(const BitsetGraph& graph, const std::vector<std::size_t>& core,
                    std::optional<Clock::time_point> deadline, std::vector<int>& best) {
   const std::size_t n = graph.vertex_count();
@@ -268,7 +270,7 @@ bool greedy_clique(const BitsetGraph& graph, const std::vector<std::size_t>& cor
   std::size_t eligible = n;  // vertices with core >= |best|: a prefix of the order
   for (std::size_t start = 0; start < n; ++start) {
     if (core[start] + 1 <= best.size()) break;  // cores are non-increasing along the order
-    if ((start & 31) == 0 && deadline && Clock::now() >= *deadline) return false;
+    if (start > 0 && (start & 31) == 0 && deadline && Clock::now() >= *deadline) return false;
     while (eligible > 0 && core[eligible - 1] < best.size()) --eligible;
     const std::size_t active_words = (eligible + kBits - 1) / kBits;
     const Word* row = graph.row(start);
@@ -457,7 +459,7 @@ MaxCliqueResult find_maximum_clique(const BitsetGraph& graph, const MaxCliqueOpt
   }
   result.statistics.branches = branches;
 
-  if (incumbent.empty()) incumbent.push_back(0);  // any vertex is a clique (deadline before any search)
+  if (incumbent.empty()) incumbent.push_back(0);  // any vertex is a clique (no heuristic, deadline before any search)
   result.clique.reserve(incumbent.size());
   for (int v : incumbent) result.clique.push_back(original_of[static_cast<std::size_t>(v)]);
   std::sort(result.clique.begin(), result.clique.end());

@@ -377,6 +377,15 @@ TEST(GraduatedClique, SharedDeadlineKeepsEveryLevelValid) {
       EXPECT_GE(graduated.levels[k].size(), graduated.levels[k - 1].size());
     }
   }
+  // A deadline already past when the search starts (a slow machine, a sanitizer build) still gives
+  // each level the greedy clique of its highest-core vertex, never a lone vertex of a dense graph.
+  options.deadline = std::chrono::steady_clock::now();
+  const GraduatedCliqueResult expired = find_graduated_maximum_cliques(levels, options);
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    EXPECT_EQ(expired.levels[k].status, CliqueStatus::timeout);
+    EXPECT_GE(expired.levels[k].size(), 2u);
+    expect_sorted_clique(levels[k], expired.levels[k]);
+  }
 }
 
 }  // namespace
