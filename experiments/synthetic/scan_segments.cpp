@@ -77,7 +77,10 @@ Eigen::Isometry3d place_sensor(const Scene& scene, const RayCaster& caster, cons
   return pose;
 }
 
-/// Spatial hash of a scan's points with cubic cells, for the neighbour-leak queries.
+/// Spatial hash of a scan's points with cubic cells, for the neighbour-leak queries. Kept over a
+/// radius search of the k-d tree (nanoflann, geometry/spatial_index.h): with one cell per leak
+/// distance each query reads 27 cells, and `quadrix fitter-segments --seed 5 --scans 6
+/// --object-scans 40` took 2.7 s with it against 5.0 s with the k-d tree (same output bytes).
 class PointGrid {
  public:
   PointGrid(const Eigen::Matrix3Xd& points, double cell) : points_(points), cell_(cell) {
