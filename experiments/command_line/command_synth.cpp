@@ -52,10 +52,22 @@ void run_command(const SynthCommandOptions& options) {
   }
   if (options.scene.empty()) throw Error("synth: SCENE is required (one of street, corridor, monument; see --list)");
   if (options.out.empty()) throw Error("synth: --out DIR is required");
+  SensorModel sensor = sensor_preset(options.sensor);
+  if (options.noise) {
+    if (!(*options.noise >= 0.0)) throw Error("--noise: expected a range noise sigma >= 0 in metres");
+    sensor.range_noise_sigma = *options.noise;
+  }
+  if (options.dropout) {
+    if (!(*options.dropout >= 0.0 && *options.dropout < 1.0)) throw Error("--dropout: expected a probability in [0, 1)");
+    sensor.dropout_probability = *options.dropout;
+  }
   if (options.scene == "loop-closures") {
+    // The set places its own scans and writes binary PLY: options that would be ignored are refused.
+    if (!options.poses.empty()) throw Error("synth loop-closures: --poses does not apply (each pass places its own scans)");
+    if (options.format != "ply" || options.ascii) throw Error("synth loop-closures: writes binary PLY only (no --format pcd, no --ascii)");
     LoopClosureSetOptions loop_set = options.loop_set;
     loop_set.first_seed = options.seed;
-    loop_set.sensor = options.sensor;
+    loop_set.sensor = sensor;
     const auto start = std::chrono::steady_clock::now();
     const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(options.out, loop_set);
     std::map<std::string, int> per_bin;
@@ -66,15 +78,6 @@ void run_command(const SynthCommandOptions& options) {
     std::printf(") in %.1f s; run it with quadrix bench --pairs %s/pairs.tsv\n",
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), options.out.c_str());
     return;
-  }
-  SensorModel sensor = sensor_preset(options.sensor);
-  if (options.noise) {
-    if (!(*options.noise >= 0.0)) throw Error("--noise: expected a range noise sigma >= 0 in metres");
-    sensor.range_noise_sigma = *options.noise;
-  }
-  if (options.dropout) {
-    if (!(*options.dropout >= 0.0 && *options.dropout < 1.0)) throw Error("--dropout: expected a probability in [0, 1)");
-    sensor.dropout_probability = *options.dropout;
   }
   SyntheticOutputOptions output;
   if (options.format == "ply") {

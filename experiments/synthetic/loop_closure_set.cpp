@@ -47,7 +47,7 @@ void write_used_scans(const std::filesystem::path& root, const std::string& fold
 
 std::vector<LoopClosureSetPair> write_loop_closure_set(const std::string& directory, const LoopClosureSetOptions& options) {
   check_options(options);
-  const SensorModel sensor = sensor_preset(options.sensor);
+  const SensorModel& sensor = options.sensor;
   const std::filesystem::path root(directory);
   std::filesystem::create_directories(root);
   std::vector<LoopClosureSetPair> pairs;
@@ -99,7 +99,7 @@ std::vector<LoopClosureSetPair> write_loop_closure_set(const std::string& direct
   write_file_atomically((root / "pairs.tsv").string(), [&](std::ostream& out) {
     out << "id\tsource\ttarget\tgt\tgt_quality\tsensor\tkind\tt_m\trot_deg\n";
     for (const LoopClosureSetPair& pair : pairs)
-      out << pair.id << '\t' << pair.source << '\t' << pair.target << '\t' << pair.truth << "\texact\t" << options.sensor
+      out << pair.id << '\t' << pair.source << '\t' << pair.target << '\t' << pair.truth << "\texact\t" << sensor.name
           << '\t' << pair.bin << '\t' << decimal_text(pair.distance, 2) << '\t' << decimal_text(pair.rotation, 1) << '\n';
   });
   return pairs;

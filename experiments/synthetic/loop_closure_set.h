@@ -4,6 +4,8 @@
 // 10-20, 20-30 m). `quadrix bench --pairs DIR/pairs.tsv` runs it; its summary reports success per bin.
 #pragma once
 
+#include "experiments/synthetic/scanner_simulator.h"
+
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -15,7 +17,7 @@ namespace quadrix {
 struct LoopClosureSetOptions {
   std::uint64_t first_seed = 1;     ///< street layouts first_seed, first_seed + 1, ... (make_street_scene seeds)
   int streets = 6;                  ///< how many street layouts
-  std::string sensor = "hdl64";     ///< sensor_preset name of every scan
+  SensorModel sensor = sensor_preset("hdl64");  ///< the sensor of every scan (its name goes to pairs.tsv)
   double scan_spacing = 3.0;        ///< metres between consecutive scans of a pass
   int pairs_per_bin = 20;           ///< pairs drawn per street and bin (fewer when a bin has fewer)
   std::vector<std::pair<double, double>> bins{{0.0, 10.0}, {10.0, 20.0}, {20.0, 30.0}};  ///< [min, max) distance bins, m
