@@ -174,11 +174,15 @@ struct RunContext {
   std::map<std::string, RegistrationOptions> resolved;  // cloud path (and corruption) -> its options, resolved once (auto: measured, with up axis and crop)
 
   // The options `quadrix register` would use for this cloud on either side (resolve_registration_options).
+  RegistrationOptions resolve(const PointCloud& cloud) const {
+    return resolve_registration_options(options->preset, cloud, options->preset, cloud);
+  }
+
+  // resolve(cloud), once per key: a file is resolved once for all its pairs.
   RegistrationOptions options_of(const std::string& key, const PointCloud& cloud) {
     std::lock_guard<std::mutex> lock(preset_mutex);
     auto found = resolved.find(key);
-    if (found == resolved.end())
-      found = resolved.emplace(key, resolve_registration_options(options->preset, cloud, options->preset, cloud)).first;
+    if (found == resolved.end()) found = resolved.emplace(key, resolve(cloud)).first;
     return found->second;
   }
 
@@ -201,13 +205,14 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
                               std::uint64_t seed, BenchRow& row) {
   const BenchPair& pair = *input.pair;
   const std::string& corruption = context.options->corruption;
-  // A tilted source is resolved as given, tilted (auto measures its up axis, as `quadrix register`
-  // would on a tilted scan); otherwise on the unmoved source, whose up axis the yaw leaves alone.
+  // A tilted source is resolved as given, tilted, for this trial only (auto measures its up axis, as
+  // `quadrix register` would on a tilted scan); otherwise on the unmoved source, whose up axis the yaw
+  // leaves alone, once per file (and damage).
   const bool tilted = context.options->tilt_range_degrees > 0.0;
-  std::string source_key = corruption.empty() ? pair.source : pair.source + "|" + corruption + "|" + std::to_string(seed);
-  if (tilted) source_key += "|tilted|" + std::to_string(seed);
-  const RegistrationOptions registration = context.options_for(
-      context.options_of(source_key, tilted ? *input.source : unmoved_source), context.options_of(pair.target, *input.target));
+  const std::string source_key = corruption.empty() ? pair.source : pair.source + "|" + corruption + "|" + std::to_string(seed);
+  const RegistrationOptions registration =
+      context.options_for(tilted ? context.resolve(*input.source) : context.options_of(source_key, unmoved_source),
+                          context.options_of(pair.target, *input.target));
   const bool perturbed = perturbs(*context.options);
   const bool own_source_model = perturbed || !context.options->corruption.empty();  // not the cached one
   const auto build = [](const PointCloud& cloud, const ExtractionOptions& extraction, const ModellingOptions& modelling) {
