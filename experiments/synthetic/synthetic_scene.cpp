@@ -321,6 +321,13 @@ class SceneBuilder {
  public:
   explicit SceneBuilder(Scene& scene) : scene_(scene) {}
 
+  /// Appends a primitive of another scene under the next id.
+  void copy(const ScenePrimitive& primitive) {
+    ScenePrimitive copied = primitive;
+    copied.id = static_cast<std::uint32_t>(scene_.primitives.size());
+    add(copied);
+  }
+
   /// Rectangle spanned from `corner` by the perpendicular edges `edge_b` and `edge_c`.
   void rectangle(const std::string& name, SemanticLabel label, const Eigen::Vector3d& corner,
                  const Eigen::Vector3d& edge_b, const Eigen::Vector3d& edge_c) {
@@ -395,14 +402,6 @@ class SceneBuilder {
   void add(const ScenePrimitive& primitive) { scene_.primitives.push_back(primitive); }
 
   Scene& scene_;
-
- public:
-  /// Appends a primitive of another scene under the next id.
-  void copy(const ScenePrimitive& primitive) {
-    ScenePrimitive copied = primitive;
-    copied.id = static_cast<std::uint32_t>(scene_.primitives.size());
-    add(copied);
-  }
 };
 
 std::string numbered(const std::string& stem, int index) {
