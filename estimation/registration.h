@@ -68,6 +68,9 @@ struct AmbiguityOptions {
   std::size_t minimum_clique_for_ok = 5;      ///< a winner supported by a smaller clique is `ambiguous`: 3 or 4 mutually consistent pairs arise by chance among hundreds
   double overlap_margin = 0.0;                ///< an `ok` answer whose dense overlap (check_overlap) is below the unmoved source's by more than this fraction is `ambiguous` (0: it must beat not moving; negative: no check)
   double minimum_overlap = 0.4;               ///< an `ok` answer must land at least this fraction of the source (above its ground) within 0.3 m of the target, else `ambiguous` (0: no floor)
+  double half_turn_margin = 0.03;             ///< an `ok` answer must put more of the source on the target than the best ICP optimum reached from its half turn (check_half_turn), by this fraction, else `ambiguous` (negative: no check)
+  bool adopt_icp_optimum = true;              ///< an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it
+  std::size_t half_turn_votes = 8;            ///< ICP also starts from the half-turned rotation at this many translations the quadrics vote for (the axis of the turn is not known)
 };
 
 /// Every option of register_clouds; defaults are the paper's (§"Implementation Details").
@@ -127,6 +130,17 @@ struct RegistrationFindings {
   bool fits_worse_than_identity = false;  ///< the answer's overlap is below the unmoved source's by more than overlap_margin
   bool overlaps_too_little = false;       ///< the answer lands less of the source on the target than AmbiguityOptions::minimum_overlap
   bool settled_by_dense_search = false;   ///< the dense search replaced an unsure answer by a clear winner
+  bool half_turn_rival = false;           ///< the answer turned half a turn about the up axis fits the points about as well (check_half_turn)
+  bool replaced_by_half_turn = false;     ///< the half-turned rival fitted clearly better and became the answer (check_half_turn)
+};
+
+/// The half-turn check of an answer (check_half_turn): how well the answer and its mirror image fit.
+struct HalfTurnCheck {
+  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();             ///< centre of the answer's overlap, on the vertical axis of the half turn (target frame)
+  double answer_overlap = 0.0;                                  ///< overlap of the ICP optimum reached from the answer
+  double rival_overlap = 0.0;                                   ///< overlap of the best optimum that disagrees with the answer (0 when none)
+  Eigen::Isometry3d rival = Eigen::Isometry3d::Identity();      ///< that optimum
+  bool has_rival = false;                                       ///< some optimum disagrees with the answer
 };
 
 /// The status of a registration from its findings, the one place a status is decided: the estimation
@@ -153,6 +167,7 @@ struct RegistrationResult {
   SceneModel target_model;                                      ///< R_y
   std::optional<OverlapMeasure> overlap;                        ///< dense overlap of the answer (check_overlap: register_clouds and the benchmark)
   std::optional<DenseSearchResult> dense_search;                ///< the search along the weakest direction, when an ambiguous answer ran it
+  std::optional<HalfTurnCheck> half_turn;                       ///< the half-turn check of the last `ok` answer, when it ran
 };
 
 /// The factor options of candidate estimation between two models (Algorithm 1): Augment(), f_pp over
@@ -210,6 +225,23 @@ RegistrationResult register_modelled_clouds(const ModelledCloud& source, const M
 /// Adds to the "overlap" timing. verify_registration calls it.
 void check_overlap(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                    const AmbiguityOptions& options);
+
+/// Checks an answer against its mirror image (beyond the paper): two scans of a street taken from
+/// its two ends look alike under a half turn about a vertical axis through the stretch both see,
+/// and the quadrics can support the turned answer as strongly as the true one. The answer's
+/// rotation is turned by 180 degrees about the up axis (the target's ground normal); point-to-plane
+/// ICP then runs from that rotation turned about the centre of the source points the answer lands
+/// on the target, from the same rotation at the `half_turn_votes` translations most same-class
+/// quadric pairs vote for (the axis of the turn is not known), and from the answer itself. An `ok`
+/// answer whose own optimum beats the best disagreeing optimum by less than
+/// `options.ambiguity.half_turn_margin` is demoted to `ambiguous` (findings.half_turn_rival); one
+/// that passes becomes its ICP optimum when `adopt_icp_optimum`. When `may_replace`, an `ok` or
+/// `ambiguous` answer that the rival beats by the margin, with at least
+/// dense_search.minimum_overlap of the source on the target, is replaced by it
+/// (findings.replaced_by_half_turn) and left `ambiguous` with the old answer as its rival, for
+/// the dense search to settle. Adds the "half_turn" timing; verify_registration calls it.
+void check_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                     const RegistrationOptions& options, bool may_replace = true);
 
 /// Verification after selection (register_clouds and the benchmark): crops both clouds to their
 /// extraction's range limits around the sensor (the platform's own hits are not scene), runs

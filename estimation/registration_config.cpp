@@ -141,6 +141,9 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_clique_for_ok>("ambiguity.minimum_clique_for_ok", "a winner supported by a smaller clique is ambiguous, correspondences"),
       shared_key<&R::ambiguity, &AmbiguityOptions::overlap_margin>("ambiguity.overlap_margin", "an ok answer overlapping less than the unmoved source by more than this is ambiguous, fraction (0: it must beat not moving; negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_overlap>("ambiguity.minimum_overlap", "an ok answer landing less than this fraction of the source within 0.3 m of the target is ambiguous, fraction (0: no floor)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_margin>("ambiguity.half_turn_margin", "an ok answer must out-overlap the best optimum reached from its half turn about the up axis by this, fraction (negative: no check)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::adopt_icp_optimum>("ambiguity.adopt_icp_optimum", "an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_votes>("ambiguity.half_turn_votes", "ICP also starts from the turned rotation at this many translations the quadrics vote for, starts"),
       // dense_search
       shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),
       shared_key<&R::dense_search, &DenseSearchOptions::voxel_size>("dense_search.voxel_size", "both clouds thinned to one point per cube of this edge, m (> 0)"),

@@ -104,6 +104,24 @@ std::optional<Neighbor> PointIndex::nearest(const Eigen::Vector3d& query) const 
   return Neighbor{index, std::sqrt(squared)};
 }
 
+std::optional<Neighbor> PointIndex::nearest_within(const Eigen::Vector3d& query, double maximum_distance) const {
+  if (size() == 0 || !(maximum_distance >= 0.0)) return std::nullopt;
+  std::size_t index = 0;
+  double squared = 0.0;
+  nanoflann::KNNResultSet<double, std::size_t> result(1);
+  result.init(&index, &squared);
+  // The result set's worst distance bounds the search: leaves and branches beyond it are skipped,
+  // and only a point strictly nearer is taken. The bound is a hair above maximum_distance squared
+  // (the square of a distance need not round to its squared distance); the nearest point found
+  // is then held to maximum_distance itself, as `nearest(query)` followed by a comparison would be.
+  squared = maximum_distance * maximum_distance * (1.0 + 1e-12) + std::numeric_limits<double>::min();
+  tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  if (result.size() == 0) return std::nullopt;
+  const double distance = std::sqrt(squared);
+  if (distance > maximum_distance) return std::nullopt;
+  return Neighbor{index, distance};
+}
+
 std::vector<Neighbor> PointIndex::nearest(const Eigen::Vector3d& query, std::size_t count) const {
   count = std::min(count, size());
   std::vector<Neighbor> found;

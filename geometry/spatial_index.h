@@ -41,6 +41,9 @@ class PointIndex {
   std::vector<Neighbor> nearest(const Eigen::Vector3d& query, std::size_t count) const;
   /// The nearest point to `query` (nullopt for an empty index); allocates nothing, for inner loops such as ICP.
   std::optional<Neighbor> nearest(const Eigen::Vector3d& query) const;
+  /// The nearest point to `query` within `maximum_distance` (nullopt when none is): the tree skips
+  /// every branch beyond it, so a query far from all points (ICP from a wrong start) costs little.
+  std::optional<Neighbor> nearest_within(const Eigen::Vector3d& query, double maximum_distance) const;
 
  private:
   struct Tree;

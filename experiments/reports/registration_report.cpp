@@ -149,6 +149,14 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                               {"target_points", search.target_points},
                               {"optima", optima}};
   }
+  if (result.half_turn) {
+    const HalfTurnCheck& check = *result.half_turn;
+    report["half_turn"] = {{"pivot", {check.pivot.x(), check.pivot.y(), check.pivot.z()}},
+                           {"answer_overlap", check.answer_overlap},
+                           {"rival_overlap", check.has_rival ? nlohmann::json(check.rival_overlap) : nlohmann::json(nullptr)},
+                           {"rival", check.has_rival ? matrix_json(check.rival) : nlohmann::json(nullptr)},
+                           {"demoted", result.findings.half_turn_rival}};
+  }
   if (context.ground_truth) {
     report["ground_truth"] = {{"transform", matrix_json(*context.ground_truth)},
                               {"rte_m", translation_error(result.transform, *context.ground_truth)},

@@ -195,6 +195,13 @@ TEST(DecideRegistrationStatus, OkOnlyWhenSureAndFittingAtLeastAsWellAsNotMoving)
               f.fits_worse_than_identity = true;
             }),
             RegistrationStatus::Ambiguous);
+  // A half-turned rival about as good as the answer leaves it unsure, settled or not.
+  EXPECT_EQ(status_of([](RegistrationFindings& f) { f.half_turn_rival = true; }), RegistrationStatus::Ambiguous);
+  EXPECT_EQ(status_of([](RegistrationFindings& f) {
+              f.settled_by_dense_search = true;
+              f.half_turn_rival = true;
+            }),
+            RegistrationStatus::Ambiguous);
   // An estimation failure is the status whatever else was found.
   for (const RegistrationStatus failure : {RegistrationStatus::Degenerate, RegistrationStatus::Failed})
     EXPECT_EQ(status_of([&](RegistrationFindings& f) {
@@ -280,15 +287,107 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   EXPECT_EQ(verified.status, RegistrationStatus::Ok) << verified.message;
   EXPECT_LT(translation_error(verified.transform, truth), 0.1) << verified.message;
   EXPECT_GE(verified.overlap->transformed, verified.overlap->identity);
-  // 8 m off, the best optimum (the truth) lies outside the grid: not settled, the answer stands.
+  // 8 m off, the best optimum (the truth) lies outside the grid: not settled, the answer stands
+  // (the half-turn check, which also starts from not moving, switched off).
+  RegistrationOptions grid_only;
+  grid_only.ambiguity.half_turn_margin = -1.0;
   RegistrationResult beyond = verified;
   beyond.status = RegistrationStatus::Ok;
   beyond.message = "candidate of level 0";
   beyond.transform = Eigen::Translation3d(8.0, 0.0, 0.0) * truth;
-  verify_registration(beyond, source, target, RegistrationOptions{});
+  beyond.half_turn.reset();
+  verify_registration(beyond, source, target, grid_only);
   EXPECT_EQ(beyond.status, RegistrationStatus::Ambiguous) << beyond.message;
   EXPECT_NE(beyond.message.find("outside the grid"), std::string::npos) << beyond.message;
   EXPECT_TRUE(beyond.transform.isApprox(Eigen::Translation3d(8.0, 0.0, 0.0) * truth));
+  // With it, the optimum reached from not moving beats the demoted answer by far and replaces it;
+  // the dense search around it then settles it.
+  beyond.status = RegistrationStatus::Ok;
+  beyond.message = "candidate of level 0";
+  beyond.transform = Eigen::Translation3d(8.0, 0.0, 0.0) * truth;
+  beyond.dense_search.reset();
+  verify_registration(beyond, source, target, RegistrationOptions{});
+  EXPECT_TRUE(beyond.findings.replaced_by_half_turn) << beyond.message;
+  EXPECT_EQ(beyond.status, RegistrationStatus::Ok) << beyond.message;
+  EXPECT_LT(translation_error(beyond.transform, truth), 0.1) << beyond.message;
+}
+
+// The half-turn check on a synthetic street pair 30 m apart with opposite headings: the true answer
+// beats its mirror image and is polished by ICP; the mirror image of the truth, handed over as a
+// confident answer, is found out, replaced by its rival and settled back onto the truth.
+TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
+  const std::vector<Eigen::Vector3d> world = make_street_world(14);
+  const Eigen::Isometry3d source_pose = make_pose(180.0, {12.0, 0.5, 1.73});
+  const Eigen::Isometry3d target_pose = make_pose(3.0, {-15.0, -1.0, 1.73});
+  const PointCloud source = observe(world, source_pose);
+  const PointCloud target = observe(world, target_pose);
+  const Eigen::Isometry3d truth = target_pose.inverse() * source_pose;
+  RegistrationOptions options;
+  options.modelling.augmentation_threshold = 0;  // quadrics only, as in the street test above
+  const RegistrationResult registered = register_clouds(source, target, options);
+  ASSERT_TRUE(registered.half_turn.has_value()) << registered.message;
+
+  // The truth, 0.3 m and 2 degrees off, as a confident answer: it stays `ok`, beats its rival by
+  // more than the margin, and becomes its ICP optimum, much nearer the truth.
+  RegistrationResult near = registered;
+  near.status = RegistrationStatus::Ok;
+  near.findings = RegistrationFindings{};
+  near.message = "candidate of level 0";
+  near.transform = Eigen::Translation3d(0.3, 0.0, 0.0) * truth * Eigen::AngleAxisd(2.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ());
+  check_half_turn(near, source, target, options);
+  ASSERT_TRUE(near.half_turn.has_value()) << near.message;
+  EXPECT_EQ(near.status, RegistrationStatus::Ok) << near.message;
+  EXPECT_GE(near.half_turn->answer_overlap, near.half_turn->rival_overlap + options.ambiguity.half_turn_margin) << near.message;
+  EXPECT_LT(translation_error(near.transform, truth), 0.1) << near.message;
+  EXPECT_LT(rotation_error_degrees(near.transform, truth), 0.5) << near.message;
+  EXPECT_GT(near.timings_ms.at("half_turn"), 0.0);
+  // Without adoption the answer is checked but left where it was.
+  RegistrationOptions keep = options;
+  keep.ambiguity.adopt_icp_optimum = false;
+  RegistrationResult kept = near;
+  kept.transform = Eigen::Translation3d(0.3, 0.0, 0.0) * truth;
+  check_half_turn(kept, source, target, keep);
+  EXPECT_EQ(kept.status, RegistrationStatus::Ok) << kept.message;
+  EXPECT_TRUE(kept.transform.isApprox(Eigen::Translation3d(0.3, 0.0, 0.0) * truth));
+
+  // The truth turned half a turn about the up axis through a point between the two scans.
+  const Eigen::Vector3d pivot(target_pose.inverse() * Eigen::Vector3d(-2.0, 0.0, 0.0));
+  Eigen::Isometry3d half_turn = Eigen::Isometry3d::Identity();
+  half_turn.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  half_turn.translation() = pivot - half_turn.linear() * pivot;
+  const Eigen::Isometry3d mirrored = half_turn * truth;
+  ASSERT_FALSE(registration_succeeded(mirrored, truth));
+  RegistrationResult flipped = registered;
+  flipped.status = RegistrationStatus::Ok;
+  flipped.findings = RegistrationFindings{};
+  flipped.message = "candidate of level 0";
+  flipped.transform = mirrored;
+  check_half_turn(flipped, source, target, options, false);
+  EXPECT_EQ(flipped.status, RegistrationStatus::Ambiguous) << flipped.message;
+  EXPECT_TRUE(flipped.findings.half_turn_rival);
+  EXPECT_FALSE(flipped.findings.replaced_by_half_turn);
+  EXPECT_TRUE(flipped.transform.isApprox(mirrored));  // not replaced when replacement is not allowed
+  // The whole verification: replaced by the rival, then settled by the dense search, `ok` and right.
+  flipped.status = RegistrationStatus::Ok;
+  flipped.findings = RegistrationFindings{};
+  flipped.message = "candidate of level 0";
+  flipped.transform = mirrored;
+  flipped.dense_search.reset();
+  verify_registration(flipped, source, target, options);
+  EXPECT_TRUE(flipped.findings.replaced_by_half_turn) << flipped.message;
+  EXPECT_NE(flipped.message.find("replaces the answer"), std::string::npos) << flipped.message;
+  EXPECT_TRUE(registration_succeeded(flipped.transform, truth)) << flipped.message;
+  EXPECT_EQ(flipped.status, RegistrationStatus::Ok) << flipped.message;
+  // Switched off (negative margin), the mirror image stays a confident answer: the check is what catches it.
+  RegistrationOptions off = options;
+  off.ambiguity.half_turn_margin = -1.0;
+  RegistrationResult unchecked = registered;
+  unchecked.status = RegistrationStatus::Ok;
+  unchecked.findings = RegistrationFindings{};
+  unchecked.transform = mirrored;
+  check_half_turn(unchecked, source, target, off);
+  EXPECT_EQ(unchecked.status, RegistrationStatus::Ok);
+  EXPECT_TRUE(unchecked.transform.isApprox(mirrored));
 }
 
 TEST(RegisterClouds, OnlyOneSideBelowDeltaAAugmentsBothSides) {

@@ -79,6 +79,29 @@ TEST(PointIndex, KNearestMatchBruteForceDistances) {
   EXPECT_FALSE(PointIndex(Eigen::Matrix3Xd(3, 0)).nearest(Eigen::Vector3d::Zero()).has_value());
 }
 
+TEST(PointIndex, NearestWithinMatchesBruteForceAndItsBound) {
+  std::mt19937 rng(23);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int count = std::uniform_int_distribution<int>(1, 300)(rng);
+    Eigen::Matrix3Xd points(3, count);
+    for (int i = 0; i < count; ++i)
+      for (int d = 0; d < 3; ++d) points(d, i) = std::uniform_real_distribution<double>(-10, 10)(rng);
+    const PointIndex index(points);
+    const Eigen::Vector3d query = Eigen::Vector3d::Random() * 14.0;
+    const double bound = std::uniform_real_distribution<double>(0.0, 6.0)(rng);
+    const Neighbor nearest = brute_force(points, query).front();
+    const std::optional<Neighbor> actual = index.nearest_within(query, bound);
+    ASSERT_EQ(actual.has_value(), nearest.distance <= bound) << "trial " << trial;
+    if (actual) EXPECT_NEAR(actual->distance, nearest.distance, 1e-12) << "trial " << trial;
+    // Exactly at the bound still counts.
+    const std::optional<Neighbor> at_bound = index.nearest_within(query, nearest.distance);
+    ASSERT_TRUE(at_bound.has_value()) << "trial " << trial;
+    EXPECT_NEAR(at_bound->distance, nearest.distance, 1e-12);
+  }
+  EXPECT_FALSE(PointIndex(Eigen::Matrix3Xd(3, 0)).nearest_within(Eigen::Vector3d::Zero(), 1.0).has_value());
+  EXPECT_FALSE(PointIndex(Eigen::Matrix3Xd::Zero(3, 2)).nearest_within(Eigen::Vector3d::Zero(), -1.0).has_value());
+}
+
 TEST(PointIndex, EmptyIndexAndBadInput) {
   const PointIndex empty(Eigen::Matrix3Xd(3, 0));
   EXPECT_EQ(empty.size(), 0u);
