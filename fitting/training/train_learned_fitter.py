@@ -387,7 +387,7 @@ def main():
     parser.add_argument("--min-segments", type=int, default=6000,
                         help="analytic segments top the scan segments up to this many per type")
     parser.add_argument("--validation", type=float, default=0.1, help="share of the segments kept for validation")
-    parser.add_argument("--max-epochs", type=int, default=25, help="most passes over the training segments")
+    parser.add_argument("--max-epochs", type=int, default=100, help="most passes over the training segments")
     parser.add_argument("--patience", type=int, default=4, help="stop after this many epochs without a better validation loss")
     parser.add_argument("--lr-patience", type=int, default=2, help="halve the rate after this many epochs without one")
     parser.add_argument("--min-improvement", type=float, default=1e-3, help="relative decrease that counts as better")

@@ -80,23 +80,24 @@ TEST(LearnedFitterHeldApart, PartialCylindersConesAndSpheres) {
     const PartialMedians learned = study.partial("learned", QuadricType::CircularCylinder);
     const PartialMedians statistical = study.partial("statistical", QuadricType::CircularCylinder);
     ASSERT_GE(learned.segments, 100u);  // measured 136
-    // Measured: learned centre 6.15 cm against statistical 13.6 cm; threshold 8 cm.
-    EXPECT_LT(learned.centre_m, 0.08);
+    // Measured: learned centre 5.33 cm against statistical 13.6 cm; threshold 7 cm.
+    EXPECT_LT(learned.centre_m, 0.07);
     EXPECT_LT(learned.centre_m, statistical.centre_m);
-    // Measured: learned axis 0.92 deg; threshold 1.2 deg. The statistical axis (largest-variance
-    // direction, 0.58 deg here) stays better on these elongated segments: not asserted the other way.
-    EXPECT_LT(learned.axis_deg, 1.2);
+    // Measured: learned axis 0.75 deg; threshold 1.0 deg. The statistical axis (largest-variance
+    // direction, 0.58 deg here) stays better on these elongated segments (docs/learned_fitter.md
+    // says why): not asserted the other way.
+    EXPECT_LT(learned.axis_deg, 1.0);
   }
   {
     SCOPED_TRACE("circular cones");
     const PartialMedians learned = study.partial("learned", QuadricType::CircularCone);
     const PartialMedians statistical = study.partial("statistical", QuadricType::CircularCone);
     ASSERT_GE(learned.segments, 30u);  // measured 46
-    // Measured: learned axis 10.7 deg against statistical 41.5 deg; threshold 14 deg.
-    EXPECT_LT(learned.axis_deg, 14.0);
+    // Measured: learned axis 9.92 deg against statistical 41.5 deg; threshold 13 deg.
+    EXPECT_LT(learned.axis_deg, 13.0);
     EXPECT_LT(learned.axis_deg, statistical.axis_deg);
-    // Measured: learned apex 0.91 m against statistical 2.24 m; threshold 1.2 m.
-    EXPECT_LT(learned.centre_m, 1.2);
+    // Measured: learned apex 0.88 m against statistical 2.24 m; threshold 1.15 m.
+    EXPECT_LT(learned.centre_m, 1.15);
     EXPECT_LT(learned.centre_m, statistical.centre_m);
   }
   {
@@ -104,8 +105,8 @@ TEST(LearnedFitterHeldApart, PartialCylindersConesAndSpheres) {
     const PartialMedians learned = study.partial("learned", QuadricType::Sphere);
     const PartialMedians statistical = study.partial("statistical", QuadricType::Sphere);
     ASSERT_GE(learned.segments, 40u);  // measured 53
-    // Measured: learned centre 3.35 cm against statistical 77 cm; threshold 4.5 cm.
-    EXPECT_LT(learned.centre_m, 0.045);
+    // Measured: learned centre 3.33 cm against statistical 77 cm; threshold 4.4 cm.
+    EXPECT_LT(learned.centre_m, 0.044);
     EXPECT_LT(learned.centre_m, statistical.centre_m);
   }
 }
