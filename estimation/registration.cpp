@@ -86,11 +86,6 @@ bool registration_succeeded(const Eigen::Isometry3d& estimate, const Eigen::Isom
          rotation_error_degrees(estimate, truth) <= max_rotation_degrees;
 }
 
-bool keeps_ground_facing_up(const SceneModel& source, const SceneModel& target, const Eigen::Isometry3d& transform) {
-  if (!source.has_ground || !target.has_ground) return true;
-  return (transform.linear() * source.ground_normal).dot(target.ground_normal) >= 0.0;
-}
-
 RegistrationStatus decide_registration_status(const RegistrationFindings& findings) {
   if (findings.estimation_failure) return *findings.estimation_failure;
   const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
@@ -181,18 +176,6 @@ void estimate_candidate(const CandidateContext& context, const std::vector<Recor
   }
 }
 
-// A candidate that turns the source's ground upside down (keeps_ground_facing_up) is not usable.
-void reject_upturned_ground(const SceneModel& source, const SceneModel& target, RegistrationCandidate& candidate) {
-  if (!candidate.valid || keeps_ground_facing_up(source, target, candidate.transform)) return;
-  candidate.valid = false;
-  const double cosine = (candidate.transform.linear() * source.ground_normal).dot(target.ground_normal);
-  std::ostringstream note;
-  note.precision(3);
-  note << "turns the source's ground upside down (its normal lands " << std::acos(std::max(-1.0, cosine)) * 180.0 / kPi
-       << " deg from the target's)";
-  candidate.note = note.str();
-}
-
 // Algorithm 1, transformation candidate estimation: one candidate per clique level.
 std::vector<RegistrationCandidate> estimate_candidates(const SceneModel& source, const SceneModel& target,
                                                        const CorrespondenceSet& correspondence_set,
@@ -229,7 +212,6 @@ std::vector<RegistrationCandidate> estimate_candidates(const SceneModel& source,
                          std::to_string(options.minimum_inliers) + ")";
       } else {
         estimate_candidate(context, candidate.clique, candidate);
-        reject_upturned_ground(source, target, candidate);
       }
     }
     candidates.push_back(candidate);
@@ -660,9 +642,7 @@ bool compare_with_half_turn(RegistrationResult& result, const PointCloud& source
     result.half_turn = check;
     result.findings.half_turn_rival = check.has_rival && check.rival_overlap > check.answer_overlap - ambiguity.half_turn_margin;
     // A rival that beats the answer by the margin, and lands enough of the source to be settled by
-    // the dense search's own floor, takes its place as the best guess, `ambiguous`. Without the floor
-    // an answer 5 m off the truth of a KITTI loop closure (its ICP optimum at 0.03) gave way to the
-    // optimum reached from not moving (0.08), 17 m off, and the dense search then searched there.
+    // the dense search's own rule, takes its place.
     replaced = may_replace && check.has_rival && check.rival_overlap >= check.answer_overlap + ambiguity.half_turn_margin &&
                check.rival_overlap >= options.dense_search.minimum_overlap;
     std::ostringstream why;

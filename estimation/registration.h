@@ -143,13 +143,6 @@ struct HalfTurnCheck {
   bool has_rival = false;                                       ///< some optimum disagrees with the answer
 };
 
-/// Whether `transform` keeps the source's ground facing up in the target: with both grounds found
-/// (each normal pointing up in its own cloud), R n_source must not point against n_target; true
-/// when either side has no ground. A scanner moves over the ground, it is not turned over it; the
-/// paper's ground factor is a plane-to-plane distance, blind to the plane's side, so a clique can
-/// pull the refinement to a transform upside down. Candidates that fail it are not valid.
-bool keeps_ground_facing_up(const SceneModel& source, const SceneModel& target, const Eigen::Isometry3d& transform);
-
 /// The status of a registration from its findings, the one place a status is decided: the estimation
 /// failure when there is one; otherwise `ok` when the answer is sure (no close rival and enough support,
 /// or settled by the dense search), fits the points at least as well as not moving and overlaps the

@@ -171,20 +171,6 @@ TEST(RegisterModels, AWinnerOnTooSmallACliqueIsAmbiguousNotOk) {
   EXPECT_TRUE(weak.transform.isApprox(supported.transform));
 }
 
-TEST(KeepsGroundFacingUp, AnUpsideDownTransformIsRejectedOnlyWhenBothGroundsAreKnown) {
-  SceneModel source, target;
-  source.has_ground = target.has_ground = true;
-  source.ground_normal = Eigen::Vector3d(0.05, 0.0, 1.0).normalized();  // a slightly tilted scan
-  target.ground_normal = Eigen::Vector3d::UnitZ();
-  EXPECT_TRUE(keeps_ground_facing_up(source, target, Eigen::Isometry3d::Identity()));
-  EXPECT_TRUE(keeps_ground_facing_up(source, target, make_pose(170.0, {30.0, -4.0, 0.5})));  // any yaw
-  EXPECT_TRUE(keeps_ground_facing_up(source, target, make_pose(0.0, {0.0, 0.0, 0.0}, 85.0)));  // tilted, not over
-  EXPECT_FALSE(keeps_ground_facing_up(source, target, make_pose(0.0, {0.0, 0.0, 0.0}, 180.0)));
-  EXPECT_FALSE(keeps_ground_facing_up(source, target, make_pose(40.0, {5.0, 1.0, 0.0}, 120.0)));
-  target.has_ground = false;
-  EXPECT_TRUE(keeps_ground_facing_up(source, target, make_pose(0.0, {0.0, 0.0, 0.0}, 180.0)));
-}
-
 TEST(DecideRegistrationStatus, OkOnlyWhenSureAndFittingAtLeastAsWellAsNotMoving) {
   const auto status_of = [](auto&& set) {
     RegistrationFindings findings;
