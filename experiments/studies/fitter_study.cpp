@@ -951,14 +951,21 @@ void write_learned_fitter_training_summary(std::ostream& out, const std::string&
       << " min wall and " << fixed(training.value("total_cpu_seconds", kNaN) / 60.0, 1)
       << " CPU-min in all on the shared 2-core machine. Validation: a held-out share of the training pool (scan and "
          "analytic segments); training stops after " << training.value("patience", 0)
-      << " epochs without a better validation loss and keeps the best epoch.\n\n"
-      << "| type | scan segments | analytic segments | epochs run | kept epoch | best validation loss | CPU time |\n"
-      << "|---|---:|---:|---:|---:|---:|---:|\n";
-  for (const auto& [type, record] : training["per_type"].items())
+      << " epochs without a better validation loss and keeps the best epoch. The last column is the network's "
+         "floor: its median axis error on clean, complete analytic segments of its type (no noise, nothing hidden), "
+         "where the largest-variance axis of an elongated segment, the statistical fitter's, is exact.\n\n"
+      << "| type | scan segments | analytic segments | epochs run | kept epoch | best validation loss | CPU time | "
+         "axis error, clean and complete |\n"
+      << "|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const auto& [type, record] : training["per_type"].items()) {
+    const nlohmann::json* clean_axis = nullptr;
+    if (record.contains("held_out_clean_full") && record["held_out_clean_full"].contains("axis_deg"))
+      clean_axis = &record["held_out_clean_full"]["axis_deg"];
     out << "| " << type << " | " << record.value("scan_segments", 0) << " | " << record.value("analytic_segments", 0) << " | "
         << record.value("epochs_run", 0) << " | " << record.value("best_epoch", 0) << " | "
         << fixed(record.value("best_validation_loss", kNaN), 4) << " | " << fixed(record.value("training_cpu_seconds", kNaN), 0)
-        << " s |\n";
+        << " s | " << (clean_axis ? fixed(clean_axis->value("median", kNaN), 2) + "°" : std::string("–")) << " |\n";
+  }
 }
 
 /// Types of the synthetic grid, in enum order: the rows and columns of the per-type tables.
