@@ -542,8 +542,9 @@ std::vector<Eigen::Vector3d> vote_translations(const SceneModel& source, const S
   }
   std::stable_sort(peaks.begin(), peaks.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   std::vector<Eigen::Vector3d> chosen;
-  for (const auto& [support, translation] : peaks) {
+  for (const auto& peak : peaks) {
     if (chosen.size() >= count) break;
+    const Eigen::Vector3d& translation = peak.second;  // a plain reference: C++17 lambdas cannot capture structured bindings
     const bool near_better = std::any_of(chosen.begin(), chosen.end(), [&](const Eigen::Vector3d& other) {
       return (translation - other).norm() < 2.0;
     });
