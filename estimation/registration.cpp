@@ -620,6 +620,7 @@ bool compare_with_half_turn(RegistrationResult& result, const PointCloud& source
     // No grid: the search's single "answer" start is the turned answer (range 0 either way).
     DenseSearchOptions grid = options.dense_search;
     grid.range = grid.across_range = 0.0;
+    grid.source_samples = ambiguity.half_turn_samples;
     const DenseSearchResult search =
         search_weakest_direction(source, target, turned, other_starts, up, source_ground,
                                  ambiguity.translation_disagreement, ambiguity.rotation_disagreement_degrees, grid);

@@ -143,6 +143,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_overlap>("ambiguity.minimum_overlap", "an ok answer landing less than this fraction of the source within 0.3 m of the target is ambiguous, fraction (0: no floor)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_margin>("ambiguity.half_turn_margin", "an ok answer must out-overlap the best optimum reached from its half turn about the up axis by this, fraction (negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::adopt_icp_optimum>("ambiguity.adopt_icp_optimum", "an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_samples>("ambiguity.half_turn_samples", "source points the half-turn check's ICP aligns, points (>= 6)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_votes>("ambiguity.half_turn_votes", "ICP also starts from the turned rotation at this many translations the quadrics vote for, starts"),
       // dense_search
       shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),
@@ -398,6 +399,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
   }
   try {
     validate_dense_search_options(options.dense_search);
+    if (options.ambiguity.half_turn_samples < 6)
+      throw Error("ambiguity.half_turn_samples must be at least 6, got " + std::to_string(options.ambiguity.half_turn_samples));
     if (!(options.ambiguity.minimum_overlap >= 0.0 && options.ambiguity.minimum_overlap <= 1.0))
       throw Error("ambiguity.minimum_overlap must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.minimum_overlap));
   } catch (const Error& error) {
