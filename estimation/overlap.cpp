@@ -73,15 +73,21 @@ OverlapMeasure measure_overlap(const PointCloud& source, const PointCloud& targe
   // 5,000 samples give each fraction to about +-0.007 (one standard error at worst).
   const std::size_t stride = std::max<std::size_t>(1, (above.size() + 4999) / 5000);
   std::size_t moved = 0, still = 0;
+  Eigen::Vector3d moved_sum = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < above.size(); i += stride) {
     ++measure.sampled;
-    moved += coverage.covers(transform * above[i]) ? 1 : 0;
+    const Eigen::Vector3d placed = transform * above[i];
+    if (coverage.covers(placed)) {
+      ++moved;
+      moved_sum += placed;
+    }
     still += coverage.covers(above[i]) ? 1 : 0;
   }
   if (measure.sampled > 0) {
     measure.transformed = static_cast<double>(moved) / static_cast<double>(measure.sampled);
     measure.identity = static_cast<double>(still) / static_cast<double>(measure.sampled);
   }
+  if (moved > 0) measure.transformed_centre = Eigen::Vector3d(moved_sum / static_cast<double>(moved));
   return measure;
 }
 

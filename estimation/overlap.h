@@ -47,6 +47,7 @@ struct OverlapMeasure {
   double transformed = 0.0;     ///< overlapping fraction after the registration's transform, [0, 1]
   double identity = 0.0;        ///< overlapping fraction without moving the source, [0, 1]
   std::size_t sampled = 0;      ///< source points tested (an even stride of at most 5,000 above the ground)
+  std::optional<Eigen::Vector3d> transformed_centre;  ///< centre of the tested points that overlap after the transform, target frame (none overlap: empty)
 };
 
 /// Measures OverlapMeasure with a voxel hash of the target (cells of `distance`); points within

@@ -475,28 +475,6 @@ std::string describe_dense_search(const DenseSearchResult& search, const Registr
   return why.str();
 }
 
-// Centre of the source points (above its ground, an even stride of at most 5,000) that `transform`
-// puts within 0.3 m of the target, in the target frame; nullopt when none does.
-std::optional<Eigen::Vector3d> overlap_centre(const PointCloud& source, const PointCloud& target,
-                                              const Eigen::Isometry3d& transform,
-                                              const std::optional<Eigen::Vector4d>& source_ground) {
-  const OverlapMeasure measure;  // the overlap's own distance, so the centre is that of what check_overlap counts
-  const TargetCoverage coverage(target, measure.distance);
-  const std::size_t stride = std::max<std::size_t>(1, source.size() / 5000);
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < source.size(); i += stride) {
-    const Eigen::Vector3d point = source.point(i);
-    if (source_ground && std::abs(source_ground->head<3>().dot(point) + (*source_ground)(3)) < 0.5) continue;
-    const Eigen::Vector3d moved = transform * point;
-    if (!coverage.covers(moved)) continue;
-    sum += moved;
-    ++count;
-  }
-  if (count == 0) return std::nullopt;
-  return Eigen::Vector3d(sum / static_cast<double>(count));
-}
-
 // Translations that put the source's quadrics on same-class target quadrics under `rotation`, best
 // first (at most `count`): every pair of same-class records with a meaningful centre (not ground,
 // planes or augmented points, whose centres are where the part seen happens to be) votes
@@ -586,20 +564,17 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
 
 }  // namespace
 
-namespace {
-
-// One half-turn check of an `ok` answer (check_half_turn). Returns true when the best rival beat the
-// answer by the margin and `may_replace` let it take the answer's place (the caller checks it again).
-bool compare_with_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                            const RegistrationOptions& options, bool may_replace) {
+void check_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                     const RegistrationOptions& options, bool may_replace) {
   const AmbiguityOptions& ambiguity = options.ambiguity;
   if ((result.status != RegistrationStatus::Ok && !(may_replace && result.status == RegistrationStatus::Ambiguous)) ||
       ambiguity.half_turn_margin < 0.0 || source.empty() || target.empty())
-    return false;
-  bool replaced = false;
+    return;
   timed(result, "half_turn", [&] {
     const std::optional<Eigen::Vector4d> source_ground = source_ground_of(result);
-    const std::optional<Eigen::Vector3d> pivot = overlap_centre(source, target, result.transform, source_ground);
+    // The pivot: the centre of what the answer lands on the target, measured as check_overlap measures.
+    const std::optional<Eigen::Vector3d> pivot =
+        measure_overlap(source, target, result.transform, source_ground).transformed_centre;
     if (!pivot) return;
     // H: x -> R (x - c) + c, the half turn about the vertical axis through the overlap's centre c.
     const Eigen::Vector3d up = target_up(result, options);
@@ -645,7 +620,7 @@ bool compare_with_half_turn(RegistrationResult& result, const PointCloud& source
     result.findings.half_turn_rival = check.has_rival && check.rival_overlap > check.answer_overlap - ambiguity.half_turn_margin;
     // A rival that beats the answer by the margin, and lands enough of the source to be settled by
     // the dense search's own rule, takes its place.
-    replaced = may_replace && check.has_rival && check.rival_overlap >= check.answer_overlap + ambiguity.half_turn_margin &&
+    const bool replaced = may_replace && check.has_rival && check.rival_overlap >= check.answer_overlap + ambiguity.half_turn_margin &&
                check.rival_overlap >= options.dense_search.minimum_overlap;
     std::ostringstream why;
     why.precision(3);
@@ -666,7 +641,7 @@ bool compare_with_half_turn(RegistrationResult& result, const PointCloud& source
       result.message += "; answer refined by point-to-plane ICP";
     }
     if (replaced) {
-      // The rival is only the best of a coarse grid: it stays `ambiguous` until the dense search
+      // The rival is only the best of a handful of starts: it stays `ambiguous` until the dense search
       // around it settles it (a street repeats along itself), with the old answer as a competing start.
       result.half_turn->rival = result.transform;
       result.half_turn->rival_overlap = check.answer_overlap;
@@ -676,14 +651,6 @@ bool compare_with_half_turn(RegistrationResult& result, const PointCloud& source
     }
     decide(result);
   });
-  return replaced;
-}
-
-}  // namespace
-
-void check_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                     const RegistrationOptions& options, bool may_replace) {
-  compare_with_half_turn(result, source, target, options, may_replace);
 }
 
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,

@@ -168,7 +168,7 @@ struct RegistrationResult {
   SceneModel target_model;                                      ///< R_y
   std::optional<OverlapMeasure> overlap;                        ///< dense overlap of the answer (check_overlap: register_clouds and the benchmark)
   std::optional<DenseSearchResult> dense_search;                ///< the search along the weakest direction, when an ambiguous answer ran it
-  std::optional<HalfTurnCheck> half_turn;                       ///< the half-turn check of the last `ok` answer, when it ran
+  std::optional<HalfTurnCheck> half_turn;                       ///< the last half-turn check (check_half_turn), when one ran
 };
 
 /// The factor options of candidate estimation between two models (Algorithm 1): Augment(), f_pp over
