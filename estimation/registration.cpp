@@ -572,9 +572,11 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
     return;
   timed(result, "half_turn", [&] {
     const std::optional<Eigen::Vector4d> source_ground = source_ground_of(result);
-    // The pivot: the centre of what the answer lands on the target, measured as check_overlap measures.
+    // The pivot: the centre of what the answer lands on the target, as check_overlap measured it for
+    // this answer (measured here when it has not run).
     const std::optional<Eigen::Vector3d> pivot =
-        measure_overlap(source, target, result.transform, source_ground).transformed_centre;
+        result.overlap ? result.overlap->transformed_centre
+                       : measure_overlap(source, target, result.transform, source_ground).transformed_centre;
     if (!pivot) return;
     // H: x -> R (x - c) + c, the half turn about the vertical axis through the overlap's centre c.
     const Eigen::Vector3d up = target_up(result, options);

@@ -240,7 +240,9 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 /// `ambiguous` answer that the rival beats by the margin, with at least
 /// dense_search.minimum_overlap of the source on the target, is replaced by it
 /// (findings.replaced_by_half_turn) and left `ambiguous` with the old answer as its rival, for
-/// the dense search to settle. Adds the "half_turn" timing; verify_registration calls it.
+/// the dense search to settle. The pivot comes from `result.overlap` when set, so check_overlap must
+/// have measured the current answer (verify_registration keeps that order). Adds the "half_turn"
+/// timing; verify_registration calls it.
 void check_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                      const RegistrationOptions& options, bool may_replace = true);
 
