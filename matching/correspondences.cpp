@@ -195,4 +195,20 @@ CorrespondenceQuality evaluate_correspondences(const SceneModel& source, const S
   return quality;
 }
 
+std::size_t count_true_partners(const SceneModel& source, const SceneModel& target,
+                                const Eigen::Isometry3d& source_to_target, double inlier_distance) {
+  // Models hold at most a few hundred fitted records, so every pair of a label is compared.
+  const auto target_groups = indices_by_label(target, 0, target.augmented_begin);
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < source.augmented_begin; ++i) {
+    const auto group = target_groups.find(source.records[i].label);
+    if (group == target_groups.end()) continue;
+    const Eigen::Vector3d placed = source_to_target * source.records[i].full_center;
+    found += std::any_of(group->second.begin(), group->second.end(), [&](std::uint32_t j) {
+      return (placed - target.records[j].full_center).norm() <= inlier_distance;
+    }) ? 1 : 0;
+  }
+  return found;
+}
+
 }  // namespace quadrix

@@ -71,4 +71,12 @@ CorrespondenceQuality evaluate_correspondences(const SceneModel& source, const S
                                                const Eigen::Isometry3d& source_to_target,
                                                double inlier_distance = 0.5, std::size_t minimum_inliers = 3);
 
+/// The true quadric correspondences any matcher could find (the stage before matching, for finding
+/// where they are lost): fitted source records (not augmented points: those sample surfaces densely,
+/// so nearly every one has a partner) with a partner in the target under the ground truth
+/// `source_to_target`, i.e. a fitted target record of the same label whose full centre lies within
+/// `inlier_distance` of the transformed source full centre (evaluate_correspondences' inlier rule).
+std::size_t count_true_partners(const SceneModel& source, const SceneModel& target,
+                                const Eigen::Isometry3d& source_to_target, double inlier_distance = 0.5);
+
 }  // namespace quadrix

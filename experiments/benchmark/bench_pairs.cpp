@@ -168,6 +168,12 @@ std::vector<BenchPair> read_pairs_tsv(const std::string& path) {
         throw Error(where + ": t_m '" + distance + "' is not a number (or '-')");
       }
     }
+    const auto label_file = [&](const char* name) {
+      const std::string value = field(name);
+      return value.empty() || value == "-" ? std::string() : resolve(value);
+    };
+    pair.source_labels = label_file("source_labels");
+    pair.target_labels = label_file("target_labels");
     pairs.push_back(std::move(pair));
   }
   if (columns.empty()) throw file_error(path, "empty pairs file (expected a header line)");

@@ -24,10 +24,13 @@ struct BenchPair {
   std::string kind;                                ///< loop_closure | odometry | local | ... (pairs.tsv `kind`)
   std::string difficulty;                          ///< difficulty bin ("0-10", "10 m", ...) the summary groups by; defaults to `kind`
   double distance = -1.0;                          ///< distance between the two sensor positions, m (-1: unknown)
+  std::string source_labels;                       ///< SemanticKITTI .label file of the source (pairs.tsv `source_labels`; "" none)
+  std::string target_labels;                       ///< SemanticKITTI .label file of the target (pairs.tsv `target_labels`; "" none)
 };
 
 /// Reads a pairs.tsv file: a header line naming at least the columns id, source, target, gt
-/// (optional: gt_quality, sensor, kind, t_m, rot_deg), then one tab-separated pair a line; blank
+/// (optional: gt_quality, sensor, kind, t_m, rot_deg, source_labels, target_labels: SemanticKITTI
+/// .label files for `quadrix bench --labels`), then one tab-separated pair a line; blank
 /// lines and lines starting with '#' are skipped. Paths are relative to the file's folder; gt "-"
 /// (or gt_quality "none") means no ground truth. The ground-truth files are read here. Throws
 /// quadrix::Error naming the file and line for a missing column, a duplicate id or an unreadable pose.

@@ -65,13 +65,15 @@ const std::vector<std::string>& csv_columns() {
       "task",          "pair_id",      "trial",          "method",  "difficulty",         "kind",
       "has_gt",        "status",       "success",        "rte_m",   "rre_deg",            "yaw_deg",
       "tilt_deg",      "shift_x_m",    "shift_y_m",      "seed",    "correspondences",    "inliers",
-      "recalled",      "source_model_bytes", "target_model_bytes", "overlap", "identity_overlap", "timings_ms", "message"};
+      "recalled",      "true_partners", "quadric_inliers", "best_clique_inliers", "clique_inliers", "source_model_bytes", "target_model_bytes",
+      "overlap",       "identity_overlap", "timings_ms", "message"};
   return columns;
 }
 
 // Columns added after the first files were written; older files without them still read (value 0).
 bool is_later_column(const std::string& name) {
-  return name == "overlap" || name == "identity_overlap" || name == "tilt_deg";
+  return name == "overlap" || name == "identity_overlap" || name == "tilt_deg" || name == "true_partners" ||
+         name == "quadric_inliers" || name == "best_clique_inliers" || name == "clique_inliers";
 }
 
 std::string timings_text(const std::map<std::string, double>& timings) {
@@ -204,6 +206,13 @@ std::vector<MethodSummary> summarize_bench(const std::vector<BenchRow>& rows, co
         rte.push_back(row.rte);
         rre.push_back(row.rre);
       }
+      if (row.true_partners >= 0) {
+        TrueCorrespondenceStages& found = summary.stages_by_difficulty[row.difficulty];
+        found.modelled.push_back(static_cast<double>(row.true_partners));
+        found.matched.push_back(static_cast<double>(row.quadric_inliers));
+        found.best_clique.push_back(static_cast<double>(row.best_clique_inliers));
+        found.chosen_clique.push_back(static_cast<double>(row.clique_inliers));
+      }
       if (row.recalled >= 0) {
         ++recall_rows;
         recalled += static_cast<std::size_t>(row.recalled);
@@ -306,6 +315,34 @@ std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, 
       for (const auto& [status, outcome] : outcomes) md << " " << status << " " << outcome.right << " / " << outcome.wrong << ";";
       md << " |\n";
     }
+  const bool any_stages = std::any_of(summaries.begin(), summaries.end(),
+                                     [](const MethodSummary& s) { return !s.stages_by_difficulty.empty(); });
+  if (any_stages) {
+    md << "\n## Where the true correspondences are lost\n\nA true correspondence pairs fitted quadrics of one class "
+          "whose full centres lie within 0.5 m under the ground truth (augmented points left out). modelled: source "
+          "quadrics with such a partner in the target model (all that matching could find); matched: among the "
+          "putative correspondences; best clique: "
+          "the most in one level's maximum clique; chosen: in the chosen candidate's clique. Medians, then the share of "
+          "pairs with at least 3 (the fewest that fix a transform).\n\n"
+          "| method | difficulty | pairs | modelled | matched | best clique | chosen | >= 3 modelled | >= 3 matched | "
+          ">= 3 best clique | >= 3 chosen |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+    const auto share_of_three = [](const std::vector<double>& counts) {
+      const auto enough = std::count_if(counts.begin(), counts.end(), [](double count) { return count >= 3.0; });
+      return format("%.0f%%", 100.0 * static_cast<double>(enough) / static_cast<double>(counts.size()));
+    };
+    for (const MethodSummary& s : summaries)
+      for (const std::string& difficulty : difficulties) {
+        const auto found = s.stages_by_difficulty.find(difficulty);
+        if (found == s.stages_by_difficulty.end()) continue;
+        const TrueCorrespondenceStages& stages = found->second;
+        md << "| " << s.method << " | " << difficulty << " | " << stages.modelled.size();
+        for (const auto* counts : {&stages.modelled, &stages.matched, &stages.best_clique, &stages.chosen_clique})
+          md << " | " << format("%.0f", quantile(*counts, 0.5));
+        for (const auto* counts : {&stages.modelled, &stages.matched, &stages.best_clique, &stages.chosen_clique})
+          md << " | " << share_of_three(*counts);
+        md << " |\n";
+      }
+  }
   md << "\n## Time per stage (median / p90, ms)\n\n| method | stage | median | p90 |\n|---|---|---|---|\n";
   for (const MethodSummary& s : summaries) {
     std::vector<std::string> stages = ordered_stages(s.stage_ms);
@@ -334,7 +371,8 @@ void write_bench_rows_csv(const std::string& path, const std::vector<BenchRow>& 
           << csv_field(r.status) << "," << (r.has_ground_truth ? (r.success ? "1" : "0") : "") << ","
           << (r.has_ground_truth ? exact(r.rte) : "") << "," << (r.has_ground_truth ? exact(r.rre) : "") << ","
           << exact(r.yaw_degrees) << "," << exact(r.tilt_degrees) << "," << exact(r.shift_x) << "," << exact(r.shift_y) << "," << r.seed << ","
-          << r.correspondences << "," << r.inliers << "," << r.recalled << "," << r.source_model_bytes << ","
+          << r.correspondences << "," << r.inliers << "," << r.recalled << "," << r.true_partners << ","
+          << r.quadric_inliers << "," << r.best_clique_inliers << "," << r.clique_inliers << "," << r.source_model_bytes << ","
           << r.target_model_bytes << "," << exact(r.overlap) << "," << exact(r.identity_overlap) << ","
           << csv_field(timings_text(r.timings_ms)) << "," << csv_field(r.message) << "\n";
     }
@@ -410,6 +448,11 @@ std::vector<BenchRow> read_bench_rows_csv(const std::string& path) {
     r.correspondences = integer("correspondences");
     r.inliers = integer("inliers");
     r.recalled = static_cast<int>(integer("recalled"));
+    for (const auto& [name, value] : {std::pair<const char*, long long*>{"true_partners", &r.true_partners},
+                                      {"quadric_inliers", &r.quadric_inliers},
+                                      {"best_clique_inliers", &r.best_clique_inliers},
+                                      {"clique_inliers", &r.clique_inliers}})
+      if (index_of.count(name)) *value = integer(name);
     r.source_model_bytes = integer("source_model_bytes");
     r.target_model_bytes = integer("target_model_bytes");
     r.overlap = number("overlap", -1.0);

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <future>
+#include <iterator>
 #include <memory>
 #include <mutex>
 #include <random>
@@ -213,12 +214,17 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   const RegistrationOptions registration =
       context.options_for(tilted ? context.resolve(*input.source) : context.options_of(source_key, unmoved_source),
                           context.options_of(pair.target, *input.target));
+  if (context.options->labels && (input.source->labels.empty() || input.target->labels.empty()))
+    throw Error("pair '" + pair.id + "': --labels needs per-point labels for both clouds (pairs.tsv columns " +
+                "source_labels / target_labels, or a label field in the cloud files)");
   const bool perturbed = perturbs(*context.options);
   const bool own_source_model = perturbed || !context.options->corruption.empty();  // not the cached one
-  const auto build = [](const PointCloud& cloud, const ExtractionOptions& extraction, const ModellingOptions& modelling) {
+  const bool labelled = context.options->labels;
+  const auto build = [labelled](const PointCloud& cloud, ExtractionOptions extraction, const ModellingOptions& modelling) {
     CachedModel cached;
+    if (labelled) extraction.semantic_mode = SemanticMode::Labels;
     const Clock::time_point start = Clock::now();
-    cached.modelling = model_scene(cloud, extraction, modelling);
+    cached.modelling = model_scene(cloud, extraction, modelling, labelled ? cloud.labels : std::vector<std::uint32_t>());
     cached.modelling_ms = elapsed_ms(start);
     return cached;
   };
@@ -266,6 +272,29 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
         evaluate_correspondences(result.source_model, result.target_model, set.correspondences, truth);
     row.inliers = static_cast<long long>(quality.inliers);
     row.recalled = quality.recalled ? 1 : 0;
+    // Where the true quadric correspondences are lost: modelled in both scans, matched, kept in a
+    // level's maximum clique, kept in the chosen candidate's clique (augmented points left out).
+    row.true_partners = static_cast<long long>(count_true_partners(result.source_model, result.target_model, truth));
+    std::vector<Correspondence> quadric_matches;
+    std::copy_if(set.correspondences.begin(), set.correspondences.end(), std::back_inserter(quadric_matches),
+                 [](const Correspondence& correspondence) { return !correspondence.augmented; });
+    row.quadric_inliers = static_cast<long long>(
+        evaluate_correspondences(result.source_model, result.target_model, quadric_matches, truth).inliers);
+    const auto true_in_clique = [&](const RegistrationCandidate& candidate) {
+      std::vector<Correspondence> clique;
+      for (const RecordCorrespondence& pair_in_clique : candidate.clique) {
+        if (pair_in_clique.source_index >= result.source_model.augmented_begin) continue;
+        Correspondence correspondence;
+        correspondence.source = static_cast<std::uint32_t>(pair_in_clique.source_index);
+        correspondence.target = static_cast<std::uint32_t>(pair_in_clique.target_index);
+        clique.push_back(correspondence);
+      }
+      return static_cast<long long>(evaluate_correspondences(result.source_model, result.target_model, clique, truth).inliers);
+    };
+    row.best_clique_inliers = 0;
+    for (const RegistrationCandidate& candidate : result.candidates)
+      row.best_clique_inliers = std::max(row.best_clique_inliers, true_in_clique(candidate));
+    row.clique_inliers = result.candidates.empty() ? 0 : true_in_clique(result.candidates[result.best_candidate]);
   }
   return output;
 }
@@ -283,10 +312,16 @@ BenchMethodOutput run_baseline_method(const std::string& method, const BenchMeth
 std::vector<BenchRow> run_task(RunContext& context, const Task& task) {
   const BenchOptions& options = *context.options;
   const BenchPair& pair = (*context.pairs)[task.pair];
+  // With --labels, a cloud carries the pair's label file (else its own label field, checked in run_quadrix).
+  const auto read = [&](const std::string& path, const std::string& labels) {
+    PointCloud cloud = read_point_cloud(path);
+    if (options.labels && !labels.empty()) cloud.labels = read_semantic_kitti_labels(labels, cloud.size());
+    return cloud;
+  };
   const std::shared_ptr<const PointCloud> source =
-      context.clouds.get(pair.source, [&] { return read_point_cloud(pair.source); });
+      context.clouds.get(pair.source, [&] { return read(pair.source, pair.source_labels); });
   const std::shared_ptr<const PointCloud> target =
-      context.clouds.get(pair.target, [&] { return read_point_cloud(pair.target); });
+      context.clouds.get(pair.target, [&] { return read(pair.target, pair.target_labels); });
   const std::uint64_t seed = options.seed * 1000003ULL + task.index;
   const Eigen::Isometry3d perturbation = perturbation_of(options, seed);
   const bool perturbed = perturbs(options);

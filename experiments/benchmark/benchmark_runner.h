@@ -53,6 +53,7 @@ struct BenchOptions {
   double translation_range = 0.0;               ///< and translate it uniformly within a horizontal disc of this radius, m
   double tilt_range_degrees = 0.0;              ///< and tilt it about a random horizontal axis through the sensor by up to this angle (auto then finds the up axis itself)
   std::string corruption;                       ///< fault injected into every source cloud (parse_corruption name; "" none)
+  bool labels = false;                          ///< Quadrix in the labels semantic mode: per-point classes from each pair's label files, else from the clouds' own label field (simulated scans)
   int trials = 1;                               ///< random perturbations per pair (1 with both ranges 0: the pair as given)
   std::uint64_t seed = 1;                       ///< seed of the perturbations; task k uses seed * 1000003 + k (recorded per row)
   int jobs = 1;                                 ///< tasks run in parallel
@@ -83,6 +84,10 @@ struct BenchRow {
   long long correspondences = -1;  ///< putative correspondences (quadrix; -1 otherwise)
   long long inliers = -1;          ///< of which inliers under the ground truth, 0.5 m (quadrix with ground truth; -1 otherwise)
   int recalled = -1;               ///< >= 3 inliers: 1 / 0 (quadrix with ground truth; -1 otherwise)
+  long long true_partners = -1;    ///< fitted source quadrics with a true partner in the target model (count_true_partners: what matching could find; quadrix with ground truth)
+  long long quadric_inliers = -1;  ///< true correspondences among the putative quadric correspondences (augmented points left out; quadrix with ground truth)
+  long long best_clique_inliers = -1;  ///< most true quadric correspondences in one level's maximum clique (quadrix with ground truth)
+  long long clique_inliers = -1;   ///< true quadric correspondences in the chosen candidate's clique (quadrix with ground truth)
   long long source_model_bytes = -1;  ///< binary model size of the source frame (quadrix; -1 otherwise)
   long long target_model_bytes = -1;  ///< binary model size of the target frame (quadrix; -1 otherwise)
   double overlap = -1.0;            ///< fraction of the source landing on the target under the answer (quadrix; -1 otherwise)
@@ -130,6 +135,15 @@ struct StatusOutcome {
   std::size_t wrong = 0;  ///< rows that did not
 };
 
+/// True quadric correspondences left after each stage, one entry per row with ground truth (BenchRow's
+/// true_partners, quadric_inliers, best_clique_inliers, clique_inliers).
+struct TrueCorrespondenceStages {
+  std::vector<double> modelled;       ///< source records with a true partner in the target model
+  std::vector<double> matched;        ///< true putative correspondences
+  std::vector<double> best_clique;    ///< most true correspondences in one level's maximum clique
+  std::vector<double> chosen_clique;  ///< true correspondences in the chosen candidate's clique
+};
+
 /// Per-method summary of rows.
 struct MethodSummary {
   std::string method;                      ///< method name
@@ -141,6 +155,7 @@ struct MethodSummary {
   std::map<std::string, std::pair<std::size_t, std::size_t>> by_difficulty;  ///< difficulty -> (successes, with ground truth)
   std::map<std::string, std::map<std::string, StatusOutcome>> outcomes_by_kind;  ///< pair kind -> status -> right / wrong (ground truth only)
   std::size_t ok_and_wrong = 0;            ///< rows with status ok that failed the success rule: the error `ok` must never make
+  std::map<std::string, TrueCorrespondenceStages> stages_by_difficulty;  ///< difficulty -> true correspondences per stage (quadrix rows with ground truth)
   double median_rte = 0.0;                 ///< median RTE of successes, m
   double median_rre = 0.0;                 ///< median RRE of successes, degrees
   double mean_rte = 0.0;                   ///< mean RTE of successes, m

@@ -179,6 +179,7 @@ void run(BenchCommandOptions& options) {
   if (!bench.refiner.empty()) options_text << " --refiner " << bench.refiner;
   if (!bench.ablation.empty()) options_text << " --ablation " << bench.ablation;
   if (!bench.corruption.empty()) options_text << " --corrupt " << bench.corruption;
+  if (bench.labels) options_text << " --labels";
   options_text << " --yaw-range " << bench.yaw_range_degrees << " --translation-range " << bench.translation_range
                << " --tilt " << bench.tilt_range_degrees
                << " --trials " << bench.trials << " --seed " << bench.seed << " --baseline-voxel " << bench.baseline.voxel_size;
@@ -245,6 +246,9 @@ const CommandRegistration registration(70, [](CLI::App& app) {
   command->add_option("--tilt", options->bench.tilt_range_degrees,
                       "Random tilt of the source about a horizontal axis through the sensor, uniform in [0, DEG]; "
                       "auto then measures the tilted cloud's up axis")->capture_default_str();
+  command->add_flag("--labels", options->bench.labels,
+                    "Quadrix with per-point classes given (labels semantic mode): each pair's source_labels / "
+                    "target_labels files of pairs.tsv, else the clouds' own label field (simulated scans)");
   std::string corruptions;
   for (const auto& name : standard_corruption_names()) corruptions += (corruptions.empty() ? "" : ", ") + name;
   command->add_option("--corrupt", options->bench.corruption,

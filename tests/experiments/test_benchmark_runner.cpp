@@ -206,6 +206,8 @@ TEST_F(BenchFolder, RowsRoundTripThroughCsvExactly) {
     EXPECT_EQ(read[k].tilt_degrees, rows[k].tilt_degrees);
     EXPECT_EQ(read[k].timings_ms, rows[k].timings_ms);
     EXPECT_EQ(read[k].has_ground_truth, rows[k].has_ground_truth);
+    EXPECT_EQ(read[k].true_partners, rows[k].true_partners);
+    EXPECT_EQ(read[k].clique_inliers, rows[k].clique_inliers);
     EXPECT_EQ(read[k].success, rows[k].success);
   }
   std::ofstream(path, std::ios::app) << "1,x,0\n";
@@ -226,6 +228,8 @@ TEST_F(BenchFolder, RowsRoundTripThroughCsvExactly) {
   EXPECT_EQ(old_rows[0].yaw_degrees, 30.0);
   EXPECT_EQ(old_rows[0].tilt_degrees, 0.0);
   EXPECT_EQ(old_rows[0].overlap, -1.0);
+  EXPECT_EQ(old_rows[0].true_partners, -1);
+  EXPECT_EQ(old_rows[0].best_clique_inliers, -1);
   EXPECT_EQ(old_rows[0].target_model_bytes, 600);
   EXPECT_EQ(old_rows[0].timings_ms.at("total"), 12.5);
   EXPECT_EQ(old_rows[0].message, "fine");
@@ -358,6 +362,57 @@ TEST_F(BenchFolder, QuadrixOnRealKittiPairsWithAndWithoutYawTrials) {
     EXPECT_TRUE(row.success) << "yaw " << row.yaw_degrees << ", tilt " << row.tilt_degrees << ": RTE " << row.rte << " RRE "
                              << row.rre << " " << row.message;
   }
+}
+
+TEST_F(BenchFolder, LabelsModeNeedsLabelsForEveryCloud) {
+  BenchOptions options;
+  options.labels = true;
+  options.progress = false;
+  const std::vector<BenchRow> rows = run_benchmark(tiny_pairs(folder_, 1), options);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].status, "error");
+  EXPECT_NE(rows[0].message.find("--labels needs per-point labels"), std::string::npos) << rows[0].message;
+  // pairs.tsv names the label files in two optional columns ("-": none).
+  const fs::path tsv = folder_ / "pairs.tsv";
+  std::ofstream(tsv) << "id\tsource\ttarget\tgt\tsource_labels\ttarget_labels\n"
+                     << "p\ta.ply\tb.ply\t-\tlabels/a.label\t-\n";
+  const std::vector<BenchPair> pairs = read_pairs_tsv(tsv.string());
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs[0].source_labels, (folder_ / "labels" / "a.label").lexically_normal().string());
+  EXPECT_EQ(pairs[0].target_labels, "");
+}
+
+// The stage table: with the SemanticKITTI labels of frames 52 and 88 the 29.9 m pair is solved and
+// true correspondences reach the chosen clique; every row's counts shrink stage by stage.
+TEST_F(BenchFolder, TrueCorrespondencesPerStageOnTheLabelledKittiPair) {
+  QUADRIX_REQUIRE_SHARED_DATA("pairs.tsv");
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/labels/000052.label");
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/labels/000088.label");
+  std::vector<BenchPair> pairs;
+  for (BenchPair pair : read_pairs_tsv(shared_data_path("pairs.tsv")))
+    if (pair.id == "kitti00_odo_52_88") {
+      pair.source_labels = shared_data_path("kitti00/labels/000052.label");
+      pair.target_labels = shared_data_path("kitti00/labels/000088.label");
+      pairs.push_back(pair);
+    }
+  ASSERT_EQ(pairs.size(), 1u);
+  BenchOptions options;
+  options.progress = false;
+  std::vector<BenchRow> rows = run_benchmark(pairs, options);
+  options.labels = true;
+  const std::vector<BenchRow> labelled = run_benchmark(pairs, options);
+  rows.insert(rows.end(), labelled.begin(), labelled.end());
+  ASSERT_EQ(rows.size(), 2u);
+  for (const BenchRow& row : rows) {
+    EXPECT_GE(row.true_partners, 0);
+    EXPECT_GE(row.quadric_inliers, row.best_clique_inliers);
+    EXPECT_GE(row.best_clique_inliers, row.clique_inliers);
+    EXPECT_GE(row.clique_inliers, 0);
+  }
+  EXPECT_TRUE(rows[1].success) << "RTE " << rows[1].rte << " RRE " << rows[1].rre << " " << rows[1].message;
+  EXPECT_GE(rows[1].clique_inliers, 3);
+  const std::string summary = bench_summary_markdown(summarize_bench(rows, {"quadrix"}), "stages");
+  EXPECT_NE(summary.find("## Where the true correspondences are lost"), std::string::npos);
 }
 
 }  // namespace

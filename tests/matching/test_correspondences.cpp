@@ -121,6 +121,26 @@ TEST(Correspondences, EveryTruePairIsKeptAndLabelsNeverMix) {
   }
 }
 
+TEST(Correspondences, TruePartnersCountEveryMovedQuadricAndNoAugmentedPoint) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const ModelPair pair = make_pair(seed, 12, 6, 30);
+    const std::size_t moved_quadrics = 12 * kClasses.size();
+    // Every moved quadric has its partner; an unrelated extra lands within 0.5 m of another only by
+    // chance, and the 30 augmented points (each with an exact partner) are never counted.
+    const std::size_t found = count_true_partners(pair.source, pair.target, pair.source_to_target);
+    EXPECT_GE(found, moved_quadrics) << "seed " << seed;
+    EXPECT_LE(found, pair.source.augmented_begin) << "seed " << seed;
+    // Under a transform 10 m off, almost none line up.
+    Eigen::Isometry3d off = pair.source_to_target;
+    off.pretranslate(Eigen::Vector3d(10.0, 0.0, 0.0));
+    EXPECT_LT(count_true_partners(pair.source, pair.target, off), moved_quadrics / 4) << "seed " << seed;
+    // A partner must share the label.
+    SceneModel relabelled = pair.target;
+    for (std::size_t i = 0; i < relabelled.augmented_begin; ++i) relabelled.records[i].label += 100;
+    EXPECT_EQ(count_true_partners(pair.source, relabelled, pair.source_to_target), 0u) << "seed " << seed;
+  }
+}
+
 TEST(Correspondences, TopKLimitsAndMutualAgreement) {
   const ModelPair pair = make_pair(99, 50, 0, 0);
   CorrespondenceOptions options;
