@@ -98,7 +98,8 @@ train-fitter: configure
 
 # Regenerates papers/quadricsreg/ (results/ and the page README.md) from a clean build: `quadrix bench`
 # on every pair of $(DATA_DIR)/pairs.tsv with every method, the six KITTI loop closures under random yaw
-# (--yaw-range 180 --trials 10), one run per row of the paper's ablation table, then `quadrix paper`.
+# (--yaw-range 180 --trials 10), one run per row of the paper's ablation table, the synthetic
+# loop-closure validation set and the labelled KITTI pair with and without classes, then `quadrix paper`.
 # Several CPU-minutes on 2 cores.
 DATA_DIR ?= ../shared/data
 PAPER_DIR = papers/quadricsreg
@@ -108,6 +109,10 @@ PAPER_TRIALS ?= 10
 # default (FPFH features are rotation invariant; the baselines run on every unperturbed pair above).
 PAPER_YAW_METHODS ?= quadrix
 ABLATION_TRIALS ?= 3
+# The synthetic loop-closure validation set (docs/benchmark.md), generated into the build tree, and
+# the one real pair that has labels on both sides, both run without and with the given classes.
+LOOP_CLOSURE_SET = $(BUILD_DIR)/loop_closures/validation
+LABELLED_PAIRS = $(BUILD_DIR)/loop_closures/labelled_pairs.tsv
 PAPER_ABLATIONS = default no-semantics no-central no-linear-center no-planar-center no-augmented-points \
   ke30 ke40 ke60 ks15 ks25 dm-0.2 dm-0.8 dm-0.2-0.8 dm-0.2-0.6-0.8 dm-0.2-0.4-0.6-0.8-1.0 \
   no-er no-et no-augmented-factors no-refinement
@@ -122,4 +127,20 @@ papers: build
 	    --yaw-range 180 --trials $(ABLATION_TRIALS) --seed 2 --jobs $(JOBS) --no-progress --ablation $$ablation \
 	    --title "Ablation $$ablation: KITTI-00 loop closures, random yaw" --out $(PAPER_DIR)/results/ablation-$$ablation || exit 1; \
 	done
+	$(BUILD_DIR)/bin/quadrix synth loop-closures --seed 2001 --streets 5 --pairs-per-bin 20 --out $(LOOP_CLOSURE_SET)
+	$(BUILD_DIR)/bin/quadrix bench --pairs $(LOOP_CLOSURE_SET)/pairs.tsv --method quadrix --yaw-range 180 --seed 3 \
+	  --jobs $(JOBS) --no-progress --title "Synthetic loop closures (validation set, seeds 2001-2005), random yaw, no labels" \
+	  --out $(PAPER_DIR)/results/lc-validation-geometry
+	$(BUILD_DIR)/bin/quadrix bench --pairs $(LOOP_CLOSURE_SET)/pairs.tsv --method quadrix --yaw-range 180 --seed 3 --labels \
+	  --jobs $(JOBS) --no-progress --title "Synthetic loop closures (validation set, seeds 2001-2005), random yaw, simulator labels" \
+	  --out $(PAPER_DIR)/results/lc-validation-labels
+	printf 'id\tsource\ttarget\tgt\tgt_quality\tsensor\tkind\tt_m\trot_deg\tsource_labels\ttarget_labels\n' > $(LABELLED_PAIRS)
+	awk -F'\t' -v data=$(abspath $(DATA_DIR)) 'BEGIN { OFS = "\t" } $$1 == "kitti00_odo_52_88" { \
+	  $$2 = data "/" $$2; $$3 = data "/" $$3; $$4 = data "/" $$4; \
+	  print $$1, $$2, $$3, $$4, $$5, $$6, $$7, $$8, $$9, data "/kitti00/labels/000052.label", data "/kitti00/labels/000088.label" }' \
+	  $(DATA_DIR)/pairs.tsv >> $(LABELLED_PAIRS)
+	$(BUILD_DIR)/bin/quadrix bench --pairs $(LABELLED_PAIRS) --method quadrix --no-progress \
+	  --title "KITTI-00 52 -> 88 (29.9 m), no labels" --out $(PAPER_DIR)/results/kitti-52-88-geometry
+	$(BUILD_DIR)/bin/quadrix bench --pairs $(LABELLED_PAIRS) --method quadrix --labels --no-progress \
+	  --title "KITTI-00 52 -> 88 (29.9 m), SemanticKITTI labels" --out $(PAPER_DIR)/results/kitti-52-88-labels
 	$(BUILD_DIR)/bin/quadrix paper --results $(PAPER_DIR)/results --tables $(PAPER_DIR)/tables --out $(PAPER_DIR)/README.md

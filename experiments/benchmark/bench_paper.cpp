@@ -172,6 +172,12 @@ void write_run(std::ostream& md, const LoadedRun& run, const std::string& result
        << fixed(s.median_total_ms, "%.0f") << " | " << fixed(s.p90_total_ms, "%.0f") << " | "
        << (s.time_ratio_to_quadrix > 0.0 ? fixed(s.time_ratio_to_quadrix, "%.2f") : "-") << " | "
        << (s.median_model_bytes >= 0.0 ? fixed(s.median_model_bytes, "%.0f") : "-") << " |\n";
+  // Success per bin (when the run has several), each status against the truth, and where Quadrix's
+  // true correspondences are lost.
+  const bool several_bins = std::any_of(run.summaries.begin(), run.summaries.end(),
+                                        [](const MethodSummary& s) { return s.by_difficulty.size() > 1; });
+  if (several_bins) md << bench_success_by_difficulty_markdown(run.summaries, "####");
+  md << bench_status_outcomes_markdown(run.summaries, "####") << bench_true_correspondence_stages_markdown(run.summaries, "####");
   const fs::path folder = fs::path(results_folder) / run.name;
   md << "\nPer pair, per difficulty and per stage: [summary.md](" << relative_link(folder / "summary.md", page_folder) << ").\n\n";
   for (const char* plot : {"success_by_difficulty.svg", "error_cdf.svg", "time_per_stage.svg"})

@@ -263,32 +263,11 @@ std::string bench_summary_text(const std::vector<MethodSummary>& summaries) {
   return text.str();
 }
 
-std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, const std::string& title) {
+std::string bench_success_by_difficulty_markdown(const std::vector<MethodSummary>& summaries, const std::string& heading) {
   std::ostringstream md;
-  md << "# " << title << "\n\n";
-  md << "Success: RTE <= 2 m and RRE <= 5 deg, over rows with ground truth; rows without one are counted apart "
-        "(\"no GT\"). RTE/RRE are medians over successes. IR = mean inlier ratio of the putative correspondences "
-        "(0.5 m), CR = correspondence recall (>= 3 inliers). Times run from both clouds in memory to the transform "
-        "(Quadrix: both modelling times included even when a model was reused).\n\n";
-  md << "| method | success | no GT | RTE m | RRE deg | IR % | CR % | median ms | p90 ms | time / Quadrix | median model bytes/frame |\n";
-  md << "|---|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const MethodSummary& s : summaries) {
-    md << "| " << s.method << " | ";
-    if (s.with_ground_truth)
-      md << s.successes << "/" << s.with_ground_truth << " (" << format("%.1f", 100.0 * s.success_rate()) << "%)";
-    else
-      md << "-";
-    md << " | " << s.without_ground_truth << " | " << (s.successes ? format("%.3f", s.median_rte) : "-") << " | "
-       << (s.successes ? format("%.3f", s.median_rre) : "-") << " | "
-       << (s.mean_inlier_ratio >= 0.0 ? format("%.2f", 100.0 * s.mean_inlier_ratio) : "-") << " | "
-       << (s.correspondence_recall >= 0.0 ? format("%.1f", 100.0 * s.correspondence_recall) : "-") << " | "
-       << format("%.1f", s.median_total_ms) << " | " << format("%.1f", s.p90_total_ms) << " | "
-       << (s.time_ratio_to_quadrix > 0.0 ? format("%.2f", s.time_ratio_to_quadrix) : "-") << " | "
-       << (s.median_model_bytes >= 0.0 ? format("%.0f", s.median_model_bytes) : "-") << " |\n";
-  }
   const std::vector<std::string> difficulties = difficulty_order(nullptr, summaries);
   if (!difficulties.empty()) {
-    md << "\n## Success per difficulty\n\n| method |";
+    md << "\n" << heading << " Success per difficulty\n\n| method |";
     for (const std::string& difficulty : difficulties) md << " " << difficulty << " |";
     md << "\n|---|";
     for (std::size_t k = 0; k < difficulties.size(); ++k) md << "---|";
@@ -306,7 +285,12 @@ std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, 
       md << "\n";
     }
   }
-  md << "\n## Status against ground truth\n\nEach status as right / wrong by the success rule, per pair kind "
+  return md.str();
+}
+
+std::string bench_status_outcomes_markdown(const std::vector<MethodSummary>& summaries, const std::string& heading) {
+  std::ostringstream md;
+  md << "\n" << heading << " Status against ground truth\n\nEach status as right / wrong by the success rule, per pair kind "
         "(rows with ground truth). `ok` and wrong is the error `ok` must never make.\n\n"
         "| method | kind | status: right / wrong |\n|---|---|---|\n";
   for (const MethodSummary& s : summaries)
@@ -315,10 +299,17 @@ std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, 
       for (const auto& [status, outcome] : outcomes) md << " " << status << " " << outcome.right << " / " << outcome.wrong << ";";
       md << " |\n";
     }
+  return md.str();
+}
+
+std::string bench_true_correspondence_stages_markdown(const std::vector<MethodSummary>& summaries,
+                                                      const std::string& heading) {
+  std::ostringstream md;
+  const std::vector<std::string> difficulties = difficulty_order(nullptr, summaries);
   const bool any_stages = std::any_of(summaries.begin(), summaries.end(),
                                      [](const MethodSummary& s) { return !s.stages_by_difficulty.empty(); });
   if (any_stages) {
-    md << "\n## Where the true correspondences are lost\n\nA true correspondence pairs fitted quadrics of one class "
+    md << "\n" << heading << " Where the true correspondences are lost\n\nA true correspondence pairs fitted quadrics of one class "
           "whose full centres lie within 0.5 m under the ground truth (augmented points left out). modelled: source "
           "quadrics with such a partner in the target model (all that matching could find); matched: among the "
           "putative correspondences; best clique: "
@@ -343,6 +334,34 @@ std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, 
         md << " |\n";
       }
   }
+  return md.str();
+}
+
+std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, const std::string& title) {
+  std::ostringstream md;
+  md << "# " << title << "\n\n";
+  md << "Success: RTE <= 2 m and RRE <= 5 deg, over rows with ground truth; rows without one are counted apart "
+        "(\"no GT\"). RTE/RRE are medians over successes. IR = mean inlier ratio of the putative correspondences "
+        "(0.5 m), CR = correspondence recall (>= 3 inliers). Times run from both clouds in memory to the transform "
+        "(Quadrix: both modelling times included even when a model was reused).\n\n";
+  md << "| method | success | no GT | RTE m | RRE deg | IR % | CR % | median ms | p90 ms | time / Quadrix | median model bytes/frame |\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const MethodSummary& s : summaries) {
+    md << "| " << s.method << " | ";
+    if (s.with_ground_truth)
+      md << s.successes << "/" << s.with_ground_truth << " (" << format("%.1f", 100.0 * s.success_rate()) << "%)";
+    else
+      md << "-";
+    md << " | " << s.without_ground_truth << " | " << (s.successes ? format("%.3f", s.median_rte) : "-") << " | "
+       << (s.successes ? format("%.3f", s.median_rre) : "-") << " | "
+       << (s.mean_inlier_ratio >= 0.0 ? format("%.2f", 100.0 * s.mean_inlier_ratio) : "-") << " | "
+       << (s.correspondence_recall >= 0.0 ? format("%.1f", 100.0 * s.correspondence_recall) : "-") << " | "
+       << format("%.1f", s.median_total_ms) << " | " << format("%.1f", s.p90_total_ms) << " | "
+       << (s.time_ratio_to_quadrix > 0.0 ? format("%.2f", s.time_ratio_to_quadrix) : "-") << " | "
+       << (s.median_model_bytes >= 0.0 ? format("%.0f", s.median_model_bytes) : "-") << " |\n";
+  }
+  md << bench_success_by_difficulty_markdown(summaries, "##") << bench_status_outcomes_markdown(summaries, "##")
+     << bench_true_correspondence_stages_markdown(summaries, "##");
   md << "\n## Time per stage (median / p90, ms)\n\n| method | stage | median | p90 |\n|---|---|---|---|\n";
   for (const MethodSummary& s : summaries) {
     std::vector<std::string> stages = ordered_stages(s.stage_ms);

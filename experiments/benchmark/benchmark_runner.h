@@ -182,6 +182,14 @@ std::vector<MethodSummary> summarize_bench(const std::vector<BenchRow>& rows, co
 /// ratio to Quadrix, bytes per frame), success per difficulty, each status right / wrong per pair
 /// kind (the confusion table), time per stage, statuses.
 std::string bench_summary_markdown(const std::vector<MethodSummary>& summaries, const std::string& title);
+/// Its "Success per difficulty" section, under a heading of `heading` ("##", "####").
+std::string bench_success_by_difficulty_markdown(const std::vector<MethodSummary>& summaries, const std::string& heading);
+/// Its "Status against ground truth" section (each status right / wrong per pair kind), under `heading`.
+std::string bench_status_outcomes_markdown(const std::vector<MethodSummary>& summaries, const std::string& heading);
+/// Its "Where the true correspondences are lost" section (TrueCorrespondenceStages per difficulty;
+/// empty when no row counted them), under `heading`.
+std::string bench_true_correspondence_stages_markdown(const std::vector<MethodSummary>& summaries,
+                                                      const std::string& heading);
 
 /// Short plain-text summary for the terminal: per method success on pairs with ground truth,
 /// median time and its ratio to Quadrix.
