@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <map>
 
 namespace quadrix {
 
@@ -80,6 +81,37 @@ ExtractionOptions extraction_preset(const std::string& name) {
   std::string valid;
   for (const auto& preset : extraction_preset_names()) valid += (valid.empty() ? "" : ", ") + preset;
   throw Error("unknown extraction preset '" + name + "' (expected one of: " + valid + ")");
+}
+
+namespace {
+
+// Throws unless `element_class` is one the labels can give alone (ExtractionOptions::label_classes).
+void check_label_class(ElementClass element_class) {
+  if (element_class != ElementClass::Line && element_class != ElementClass::Vehicle && element_class != ElementClass::Trunk &&
+      element_class != ElementClass::Vegetation)
+    throw Error("label classes: '" + element_class_name(element_class) +
+                "' cannot be taken from labels alone (expected line, vehicle, trunk or vegetation)");
+}
+
+}  // namespace
+
+std::vector<ElementClass> parse_label_classes(const std::string& names) {
+  std::vector<ElementClass> classes;
+  std::size_t start = 0;
+  while (start <= names.size()) {
+    const std::size_t end = std::min(names.find(',', start), names.size());
+    const std::string name = names.substr(start, end - start);
+    ElementClass element_class;
+    try {
+      element_class = element_class_from_name(name);
+    } catch (const Error&) {
+      throw Error("label classes: unknown class '" + name + "' (expected line, vehicle, trunk or vegetation)");
+    }
+    check_label_class(element_class);
+    if (std::find(classes.begin(), classes.end(), element_class) == classes.end()) classes.push_back(element_class);
+    start = end + 1;
+  }
+  return classes;
 }
 
 bool element_class_for_semantic_kitti_label(std::uint32_t label, ElementClass& element_class) {
@@ -305,6 +337,35 @@ ElementGroups extract_geometric(const Eigen::Matrix3Xd& points, const std::vecto
   return groups;
 }
 
+// Labels mode for some classes only (ExtractionOptions::label_classes): points whose label maps to
+// one of them form that class's Euclidean clusters; every other point goes through the geometry-only
+// pipeline, which never sees the given ones (a car kept out of the walls and the clusters).
+ElementGroups extract_partially_labelled(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& in_range,
+                                         const std::vector<std::uint32_t>& labels, const ExtractionOptions& options,
+                                         const Eigen::Vector3d& up, ExtractionResult& result) {
+  std::map<ElementClass, std::vector<std::uint32_t>> given;
+  std::vector<std::uint32_t> unlabelled;
+  for (const std::uint32_t index : in_range) {
+    ElementClass element_class;
+    if (element_class_for_semantic_kitti_label(labels[index], element_class) &&
+        std::find(options.label_classes.begin(), options.label_classes.end(), element_class) != options.label_classes.end())
+      given[element_class].push_back(index);
+    else
+      unlabelled.push_back(index);
+  }
+  ElementGroups groups = extract_geometric(points, unlabelled, options, up, result);
+  const auto stage = Clock::now();
+  for (auto& [element_class, members] : given)
+    for (auto& cluster : euclidean_clusters(points, members, options.clusters)) {
+      Element element;
+      element.element_class = element_class;
+      element.point_indices = std::move(cluster);
+      (element_class == ElementClass::Line ? groups.lines : groups.objects).push_back(std::move(element));
+    }
+  result.timings_ms["labelled_clusters"] = detail::elapsed_ms(stage);
+  return groups;
+}
+
 // The extraction's status and message from what was found among `points_in_range` points.
 void describe_extraction(ExtractionResult& result, std::size_t points_in_range) {
   if (result.elements.empty()) {
@@ -330,6 +391,7 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
                 std::to_string(cloud.size()) + " points (expected one label per point)");
   if (!(options.up.norm() > 0.0) || !options.up.allFinite())
     throw Error("extraction option 'up' must be a finite non-zero vector");
+  for (const ElementClass element_class : options.label_classes) check_label_class(element_class);
   const Eigen::Vector3d up = options.up.normalized();
 
   ExtractionResult result;
@@ -352,9 +414,9 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
     shapes.timings_ms["crop"] = result.timings_ms["crop"];
     return shapes;
   }
-  ElementGroups groups = options.semantic_mode == SemanticMode::Labels
-                             ? extract_with_labels(points, in_range, labels, options, up, result)
-                             : extract_geometric(points, in_range, options, up, result);
+  ElementGroups groups = options.semantic_mode != SemanticMode::Labels ? extract_geometric(points, in_range, options, up, result)
+                         : options.label_classes.empty() ? extract_with_labels(points, in_range, labels, options, up, result)
+                                                         : extract_partially_labelled(points, in_range, labels, options, up, result);
   for (auto* group : {&groups.planes, &groups.lines, &groups.objects})
     for (Element& element : *group) result.elements.push_back(std::move(element));
   describe_extraction(result, in_range.size());

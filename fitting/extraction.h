@@ -168,6 +168,7 @@ struct ShapeDetectionOptions {
 struct ExtractionOptions {
   std::string preset = "vlp64";        ///< name of the preset these values came from (reported)
   SemanticMode semantic_mode = SemanticMode::Cluster;  ///< geometry-only or label-driven
+  std::vector<ElementClass> label_classes;  ///< labels mode: the classes taken from the labels, among line, vehicle, trunk and vegetation (empty: every class); points of other classes go through the geometry-only pipeline as if unlabelled (a car detector's output, or measuring which classes matter)
   bool static_scan = false;            ///< true: CGAL Efficient RANSAC shapes instead of the LiDAR pipeline
   double minimum_range = 2.0;          ///< points nearer the sensor are dropped (ego vehicle), m
   double maximum_range = 80.0;         ///< points farther away are dropped, m (0: unlimited)
@@ -180,6 +181,10 @@ struct ExtractionOptions {
   TrunkOptions trunks;                 ///< trunks separated from their crowns
   ShapeDetectionOptions shapes;        ///< static-scan shape detection
 };
+
+/// Parses a comma-separated list of class names for ExtractionOptions::label_classes
+/// ("vehicle,trunk,line"); throws quadrix::Error naming a name that is not line, vehicle, trunk or vegetation.
+std::vector<ElementClass> parse_label_classes(const std::string& names);
 
 /// Presets from the released configs (REFERENCE.md "Extraction parameters per sensor"):
 /// vlp64 (HDL-64E), vlp16, mid360, avia, monument (static TLS scan, CGAL shapes). Throws

@@ -220,9 +220,13 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   const bool perturbed = perturbs(*context.options);
   const bool own_source_model = perturbed || !context.options->corruption.empty();  // not the cached one
   const bool labelled = context.options->labels;
-  const auto build = [labelled](const PointCloud& cloud, ExtractionOptions extraction, const ModellingOptions& modelling) {
+  const std::vector<ElementClass>& label_classes = context.options->label_classes;
+  const auto build = [&](const PointCloud& cloud, ExtractionOptions extraction, const ModellingOptions& modelling) {
     CachedModel cached;
-    if (labelled) extraction.semantic_mode = SemanticMode::Labels;
+    if (labelled) {
+      extraction.semantic_mode = SemanticMode::Labels;
+      extraction.label_classes = label_classes;
+    }
     const Clock::time_point start = Clock::now();
     cached.modelling = model_scene(cloud, extraction, modelling, labelled ? cloud.labels : std::vector<std::uint32_t>());
     cached.modelling_ms = elapsed_ms(start);

@@ -54,6 +54,7 @@ struct BenchOptions {
   double tilt_range_degrees = 0.0;              ///< and tilt it about a random horizontal axis through the sensor by up to this angle (auto then finds the up axis itself)
   std::string corruption;                       ///< fault injected into every source cloud (parse_corruption name; "" none)
   bool labels = false;                          ///< Quadrix in the labels semantic mode: per-point classes from each pair's label files, else from the clouds' own label field (simulated scans)
+  std::vector<ElementClass> label_classes;      ///< with `labels`: take only these classes from the labels, the rest from geometry (ExtractionOptions::label_classes; empty: all)
   int trials = 1;                               ///< random perturbations per pair (1 with both ranges 0: the pair as given)
   std::uint64_t seed = 1;                       ///< seed of the perturbations; task k uses seed * 1000003 + k (recorded per row)
   int jobs = 1;                                 ///< tasks run in parallel

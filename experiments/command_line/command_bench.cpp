@@ -43,6 +43,7 @@ struct BenchCommandOptions {
   std::string title;                   ///< --title
   bool print_pairs = false;            ///< --print-pairs: list the pairs and stop
   bool quiet = false;                  ///< --no-progress
+  std::string label_classes;           ///< --label-classes a,b (with --labels)
   BenchOptions bench;                  ///< everything else
 };
 
@@ -148,6 +149,10 @@ void run(BenchCommandOptions& options) {
   if (std::sscanf(options.shard.c_str(), "%d/%d", &bench.shard_index, &bench.shard_count) != 2)
     throw Error("--shard '" + options.shard + "': expected i/n, e.g. 2/3");
   bench.progress = !options.quiet;
+  if (!options.label_classes.empty()) {
+    if (!bench.labels) throw Error("--label-classes needs --labels");
+    bench.label_classes = parse_label_classes(options.label_classes);
+  }
   const std::size_t task_count = pairs.size() * static_cast<std::size_t>(std::max(bench.trials, 1));
 
   const auto start = std::chrono::steady_clock::now();
@@ -180,6 +185,7 @@ void run(BenchCommandOptions& options) {
   if (!bench.ablation.empty()) options_text << " --ablation " << bench.ablation;
   if (!bench.corruption.empty()) options_text << " --corrupt " << bench.corruption;
   if (bench.labels) options_text << " --labels";
+  if (!options.label_classes.empty()) options_text << " --label-classes " << options.label_classes;
   options_text << " --yaw-range " << bench.yaw_range_degrees << " --translation-range " << bench.translation_range
                << " --tilt " << bench.tilt_range_degrees
                << " --trials " << bench.trials << " --seed " << bench.seed << " --baseline-voxel " << bench.baseline.voxel_size;
@@ -249,6 +255,9 @@ const CommandRegistration registration(70, [](CLI::App& app) {
   command->add_flag("--labels", options->bench.labels,
                     "Quadrix with per-point classes given (labels semantic mode): each pair's source_labels / "
                     "target_labels files of pairs.tsv, else the clouds' own label field (simulated scans)");
+  command->add_option("--label-classes", options->label_classes,
+                      "With --labels: take only these classes from the labels, comma-separated (line, vehicle, trunk, "
+                      "vegetation); every other point is modelled from geometry");
   std::string corruptions;
   for (const auto& name : standard_corruption_names()) corruptions += (corruptions.empty() ? "" : ", ") + name;
   command->add_option("--corrupt", options->bench.corruption,

@@ -1,5 +1,5 @@
 // `quadrix register SOURCE TARGET [--preset vlp64|vlp16|mid360|avia|monument|auto] [--config FILE.yaml]
-// [--source-preset P --target-preset P] [--labels-source F --labels-target F] [--gt FILE] [--out DIR]`:
+// [--source-preset P --target-preset P] [--labels-source F --labels-target F [--label-classes C,...]] [--gt FILE] [--out DIR]`:
 // global registration of two clouds with quadrics (paper Fig. overview, Algorithm 1). Prints the 4x4
 // transform mapping SOURCE points into the TARGET frame and a one-line summary; with --gt also RTE,
 // RRE and success (2 m / 5 deg); with --out writes report.json, merged.ply, bev.png, both models
@@ -33,6 +33,7 @@ struct RegisterCommandOptions {
   std::string config;          ///< YAML overrides applied after the presets
   std::string labels_source;   ///< SemanticKITTI labels of the source
   std::string labels_target;   ///< SemanticKITTI labels of the target
+  std::string label_classes;   ///< take only these classes from the labels (comma-separated), the rest from geometry
   std::string ground_truth;    ///< 4x4 T_gt (source -> target) for RTE/RRE
   std::string out;             ///< output folder
   std::string refiner;         ///< refiner override (ceres | nlopt)
@@ -65,6 +66,12 @@ void run(const RegisterCommandOptions& options) {
     registration.estimation.refiner = options.refiner;
   }
 
+  if (!options.label_classes.empty()) {
+    if (source_labels.empty() && target_labels.empty())
+      throw Error("--label-classes needs --labels-source and/or --labels-target");
+    registration.source_extraction.label_classes = registration.target_extraction.label_classes =
+        parse_label_classes(options.label_classes);
+  }
   const RegistrationResult result = register_clouds(source, target, registration, source_labels, target_labels);
   const double total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 
@@ -152,6 +159,9 @@ const CommandRegistration registration(60, [](CLI::App& app) {
   command->add_option("--config", options->config, "YAML overrides (keys: quadrix config --schema); unknown keys are errors");
   command->add_option("--labels-source", options->labels_source, "SemanticKITTI .label file of the source");
   command->add_option("--labels-target", options->labels_target, "SemanticKITTI .label file of the target");
+  command->add_option("--label-classes", options->label_classes,
+                      "Take only these classes from the labels, comma-separated (line, vehicle, trunk, vegetation); "
+                      "every other point is modelled from geometry");
   command->add_option("--gt", options->ground_truth, "Ground-truth 4x4 (maps source into target): print RTE/RRE/success");
   command->add_option("--refiner", options->refiner, "Refiner backend override: ceres | nlopt");
   command->add_option("--out", options->out,

@@ -518,6 +518,39 @@ TEST(Extraction, LabelsModeUsesTheMapping) {
   EXPECT_EQ(count_class(result, ElementClass::Vegetation), 2);
 }
 
+TEST(Extraction, SomeClassesFromLabelsTheRestFromGeometry) {
+  const SyntheticStreet scene = make_street(7);
+  std::vector<std::uint32_t> labels(scene.truth.size());
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const int id = scene.truth[i];
+    labels[i] = id == 0 ? 40u : id < 10 ? 50u : id < 20 ? 80u : id < 30 ? 10u : 70u;  // road, building, pole, car, vegetation
+  }
+  ExtractionOptions options = extraction_preset("vlp64");
+  options.semantic_mode = SemanticMode::Labels;
+  options.label_classes = parse_label_classes("vehicle");
+  const ExtractionResult result = extract_elements(scene.cloud, options, labels);
+  // The cars come from the labels; the ground, the walls and the poles from geometry, as without labels.
+  const ExtractionResult geometric = extract_elements(scene.cloud, extraction_preset("vlp64"));
+  ASSERT_TRUE(result.has_ground);
+  EXPECT_EQ(count_class(result, ElementClass::Vehicle), 2);
+  EXPECT_EQ(count_class(result, ElementClass::Plane), count_class(geometric, ElementClass::Plane));
+  EXPECT_EQ(count_class(result, ElementClass::Line), count_class(geometric, ElementClass::Line));
+  for (const Element& element : result.elements)
+    for (const std::uint32_t index : element.point_indices)
+      EXPECT_EQ(labels[index] == 10u, element.element_class == ElementClass::Vehicle) << "point " << index;
+  // Classes the labels cannot give alone, and names that are no class, are errors that name them.
+  options.label_classes = {ElementClass::Plane};
+  EXPECT_THROW(extract_elements(scene.cloud, options, labels), Error);
+  EXPECT_EQ(parse_label_classes("trunk,line,trunk").size(), 2u);
+  try {
+    parse_label_classes("vehicle,tree");
+    FAIL() << "an unknown class was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("'tree'"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(parse_label_classes("ground"), Error);
+}
+
 // Monument-like static scan: 3 columns, a floor and a wall, a sphere and a cone, with normals.
 PointCloud make_monument(std::uint64_t seed, int expected_counts[4]) {
   std::mt19937_64 engine(seed);
