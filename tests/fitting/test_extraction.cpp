@@ -254,6 +254,49 @@ Eigen::Matrix3Xd to_matrix(const std::vector<Eigen::Vector3d>& points) {
   return matrix;
 }
 
+TEST(Extraction, StemsStandingInAHedgeAreFoundButHedgesCarsAndPeopleAreNot) {
+  std::mt19937_64 engine(33);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto count_truth = [](const std::vector<std::uint32_t>& indices, const std::vector<int>& truth, int id) {
+    return static_cast<std::size_t>(std::count_if(indices.begin(), indices.end(), [&](std::uint32_t i) { return truth[i] == id; }));
+  };
+  // A 4 x 2 x 1 m hedge 9 m away with a 0.15 m trunk standing in it up to 3 m, and a 0.06 m pole in
+  // its other end up to 4.5 m: the hedge hides their feet, so neither the trunk rule nor a line sees them.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int> truth;
+  for (int i = 0; i < 1500; ++i) {
+    points.emplace_back(9.0 + 2.0 * unit(engine), -2.0 + 4.0 * unit(engine), 1.0 * unit(engine));
+    truth.push_back(0);
+  }
+  add_stem(points, truth, 1, {9.5, -1.0}, 0.15, 0.0, 3.0, 240, engine);
+  add_stem(points, truth, 2, {9.5, 1.5}, 0.06, 0.0, 4.5, 200, engine);
+  StemOptions options;
+  options.enabled = true;
+  const std::vector<std::vector<std::uint32_t>> stems =
+      find_stems(to_matrix(points), all_indices(points.size()), options, Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(stems.size(), 2u);
+  for (const std::vector<std::uint32_t>& stem : stems) {
+    const std::size_t trunk = count_truth(stem, truth, 1), pole = count_truth(stem, truth, 2);
+    // Most of the part above the hedge (two thirds of the trunk, three quarters of the pole) and no hedge.
+    EXPECT_TRUE(trunk >= 140u || pole >= 130u) << "trunk " << trunk << ", pole " << pole;
+    EXPECT_LE(count_truth(stem, truth, 0), 5u);
+    EXPECT_TRUE(std::is_sorted(stem.begin(), stem.end()));
+  }
+  // The hedge alone, a car-sized box and a person 1.8 m tall: no stem.
+  const auto box = [&](const Eigen::Vector3d& low, const Eigen::Vector3d& size, int count) {
+    std::vector<Eigen::Vector3d> solid;
+    for (int i = 0; i < count; ++i)
+      solid.push_back(low + size.cwiseProduct(Eigen::Vector3d(unit(engine), unit(engine), unit(engine))));
+    return find_stems(to_matrix(solid), all_indices(solid.size()), options, Eigen::Vector3d::UnitZ());
+  };
+  EXPECT_TRUE(box({9.0, -2.0, 0.0}, {2.0, 4.0, 1.0}, 1500).empty());
+  EXPECT_TRUE(box({6.0, 3.0, 0.3}, {4.2, 1.8, 1.2}, 2000).empty());
+  EXPECT_TRUE(box({5.0, 0.0, 0.0}, {0.4, 0.3, 1.8}, 300).empty());
+  // Switched off (the default), nothing.
+  const StemOptions off;
+  EXPECT_TRUE(find_stems(to_matrix(points), all_indices(points.size()), off, Eigen::Vector3d::UnitZ()).empty());
+}
+
 TEST(Extraction, TreeGivesItsTrunkAndCrownButPostsKeepTheirLine) {
   std::mt19937_64 engine(21);
   std::normal_distribution<double> gauss(0.0, 1.0);
