@@ -279,6 +279,17 @@ struct ElementGroups {
   std::vector<Element> planes, lines, objects;
 };
 
+// Each Euclidean cluster of `members`, all of one labelled class, as an element of that class.
+void add_class_clusters(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members,
+                        ElementClass element_class, const ClusterOptions& options, ElementGroups& groups) {
+  for (auto& cluster : euclidean_clusters(points, members, options)) {
+    Element element;
+    element.element_class = element_class;
+    element.point_indices = std::move(cluster);
+    (element_class == ElementClass::Line ? groups.lines : groups.objects).push_back(std::move(element));
+  }
+}
+
 // Labels semantic mode: the given per-point classes decide; ground is the ground class, planes are
 // extracted among the plane class, and each Euclidean cluster of a labelled class is one element.
 ElementGroups extract_with_labels(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& in_range,
@@ -304,14 +315,8 @@ ElementGroups extract_with_labels(const Eigen::Matrix3Xd& points, const std::vec
   result.timings_ms["planes"] = detail::elapsed_ms(stage);
   stage = Clock::now();
   for (const ElementClass element_class :
-       {ElementClass::Line, ElementClass::Vehicle, ElementClass::Trunk, ElementClass::Vegetation}) {
-    for (auto& cluster : euclidean_clusters(points, per_class[static_cast<int>(element_class)], options.clusters)) {
-      Element element;
-      element.element_class = element_class;
-      element.point_indices = std::move(cluster);
-      (element_class == ElementClass::Line ? groups.lines : groups.objects).push_back(std::move(element));
-    }
-  }
+       {ElementClass::Line, ElementClass::Vehicle, ElementClass::Trunk, ElementClass::Vegetation})
+    add_class_clusters(points, per_class[static_cast<int>(element_class)], element_class, options.clusters, groups);
   result.timings_ms["clusters"] = detail::elapsed_ms(stage);
   return groups;
 }
@@ -367,13 +372,7 @@ ElementGroups extract_partially_labelled(const Eigen::Matrix3Xd& points, const s
   }
   ElementGroups groups = extract_geometric(points, unlabelled, options, up, result);
   const auto stage = Clock::now();
-  for (auto& [element_class, members] : given)
-    for (auto& cluster : euclidean_clusters(points, members, options.clusters)) {
-      Element element;
-      element.element_class = element_class;
-      element.point_indices = std::move(cluster);
-      (element_class == ElementClass::Line ? groups.lines : groups.objects).push_back(std::move(element));
-    }
+  for (const auto& [element_class, members] : given) add_class_clusters(points, members, element_class, options.clusters, groups);
   result.timings_ms["labelled_clusters"] = detail::elapsed_ms(stage);
   return groups;
 }

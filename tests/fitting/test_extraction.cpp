@@ -254,12 +254,14 @@ Eigen::Matrix3Xd to_matrix(const std::vector<Eigen::Vector3d>& points) {
   return matrix;
 }
 
+// How many of `indices` belong to the primitive `id` of `truth`.
+std::size_t count_truth(const std::vector<std::uint32_t>& indices, const std::vector<int>& truth, int id) {
+  return static_cast<std::size_t>(std::count_if(indices.begin(), indices.end(), [&](std::uint32_t i) { return truth[i] == id; }));
+}
+
 TEST(Extraction, StemsStandingInAHedgeAreFoundButHedgesCarsAndPeopleAreNot) {
   std::mt19937_64 engine(33);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const auto count_truth = [](const std::vector<std::uint32_t>& indices, const std::vector<int>& truth, int id) {
-    return static_cast<std::size_t>(std::count_if(indices.begin(), indices.end(), [&](std::uint32_t i) { return truth[i] == id; }));
-  };
   // A 4 x 2 x 1 m hedge 9 m away with a 0.15 m trunk standing in it up to 3 m, and a 0.06 m pole in
   // its other end up to 4.5 m: the hedge hides their feet, so neither the trunk rule nor a line sees them.
   std::vector<Eigen::Vector3d> points;
@@ -300,9 +302,6 @@ TEST(Extraction, StemsStandingInAHedgeAreFoundButHedgesCarsAndPeopleAreNot) {
 TEST(Extraction, TreeGivesItsTrunkAndCrownButPostsKeepTheirLine) {
   std::mt19937_64 engine(21);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  const auto count_truth = [](const std::vector<std::uint32_t>& indices, const std::vector<int>& truth, int id) {
-    return static_cast<std::size_t>(std::count_if(indices.begin(), indices.end(), [&](std::uint32_t i) { return truth[i] == id; }));
-  };
   // Tree 8 m away: a 0.2 m trunk up to 2.8 m under the visible shell of a 1.6 x 1.4 x 1.8 m crown.
   std::vector<Eigen::Vector3d> tree;
   std::vector<int> tree_truth;
@@ -543,13 +542,19 @@ TEST(Extraction, DegenerateCloudsGiveAStatusNotACrash) {
   EXPECT_THROW(extract_elements(wall, labelled, std::vector<std::uint32_t>(3, 50)), Error);
 }
 
-TEST(Extraction, LabelsModeUsesTheMapping) {
-  const SyntheticStreet scene = make_street(7);
+// SemanticKITTI labels of the synthetic street's primitives: road, building, pole, car, vegetation.
+std::vector<std::uint32_t> semantic_kitti_labels_of(const SyntheticStreet& scene) {
   std::vector<std::uint32_t> labels(scene.truth.size());
   for (std::size_t i = 0; i < labels.size(); ++i) {
     const int id = scene.truth[i];
-    labels[i] = id == 0 ? 40u : id < 10 ? 50u : id < 20 ? 80u : id < 30 ? 10u : 70u;  // road, building, pole, car, vegetation
+    labels[i] = id == 0 ? 40u : id < 10 ? 50u : id < 20 ? 80u : id < 30 ? 10u : 70u;
   }
+  return labels;
+}
+
+TEST(Extraction, LabelsModeUsesTheMapping) {
+  const SyntheticStreet scene = make_street(7);
+  const std::vector<std::uint32_t> labels = semantic_kitti_labels_of(scene);
   ExtractionOptions options = extraction_preset("vlp64");
   options.semantic_mode = SemanticMode::Labels;
   const ExtractionResult result = extract_elements(scene.cloud, options, labels);
@@ -563,11 +568,7 @@ TEST(Extraction, LabelsModeUsesTheMapping) {
 
 TEST(Extraction, SomeClassesFromLabelsTheRestFromGeometry) {
   const SyntheticStreet scene = make_street(7);
-  std::vector<std::uint32_t> labels(scene.truth.size());
-  for (std::size_t i = 0; i < labels.size(); ++i) {
-    const int id = scene.truth[i];
-    labels[i] = id == 0 ? 40u : id < 10 ? 50u : id < 20 ? 80u : id < 30 ? 10u : 70u;  // road, building, pole, car, vegetation
-  }
+  const std::vector<std::uint32_t> labels = semantic_kitti_labels_of(scene);
   ExtractionOptions options = extraction_preset("vlp64");
   options.semantic_mode = SemanticMode::Labels;
   options.label_classes = parse_label_classes("vehicle");
