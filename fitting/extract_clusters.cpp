@@ -19,28 +19,6 @@
 namespace quadrix {
 namespace {
 
-class UnionFind {
- public:
-  explicit UnionFind(std::size_t size) : parent_(size) { std::iota(parent_.begin(), parent_.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  bool unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a == b) return false;
-    parent_[std::max(a, b)] = std::min(a, b);
-    return true;
-  }
-
- private:
-  std::vector<std::uint32_t> parent_;
-};
-
 // Open-addressing hash table from a cell key to its index (linear probing, power-of-two size, at
 // most half full). One flat allocation instead of a node per cell as in std::unordered_map.
 class CellTable {
@@ -132,7 +110,7 @@ CellGrid build_cell_grid(const Eigen::Matrix3Xd& points, const std::vector<std::
 }
 
 /// Joins cells a and b when a pair of their points is closer than the radius; the boxes settle most pairs.
-void join_if_close(const CellGrid& grid, std::uint32_t a, std::uint32_t b, double radius_squared, UnionFind& sets) {
+void join_if_close(const CellGrid& grid, std::uint32_t a, std::uint32_t b, double radius_squared, detail::UnionFind& sets) {
   if (sets.find(a) == sets.find(b)) return;
   // Box-to-box distance bounds the distance of every pair of their points.
   const Eigen::Vector3d gap =
@@ -153,7 +131,7 @@ void join_if_close(const CellGrid& grid, std::uint32_t a, std::uint32_t b, doubl
 }
 
 /// Joins cells within reach (|dx|, |dy|, |dz| <= 2), each pair once: a hash lookup per column pair, a merge along z.
-void join_neighbouring_cells(const CellGrid& grid, double radius_squared, UnionFind& sets) {
+void join_neighbouring_cells(const CellGrid& grid, double radius_squared, detail::UnionFind& sets) {
   CellTable column_table(grid.columns);
   for (std::uint32_t k = 0; k < grid.columns; ++k) {
     const Eigen::Vector3i& c = grid.coordinate[grid.column_first[k]];
@@ -190,7 +168,7 @@ void join_neighbouring_cells(const CellGrid& grid, double radius_squared, UnionF
 
 /// The candidates of each set of joined cells, clusters in order of their first cell.
 std::vector<std::vector<std::uint32_t>> collect_clusters(const CellGrid& grid, const std::vector<std::uint32_t>& candidates,
-                                                         UnionFind& sets) {
+                                                         detail::UnionFind& sets) {
   std::vector<std::int32_t> cluster_of_root(grid.cells, -1);
   std::vector<std::vector<std::uint32_t>> clusters;
   for (std::uint32_t a = 0; a < grid.cells; ++a) {
@@ -216,7 +194,7 @@ std::vector<std::vector<std::uint32_t>> grid_clusters(const Eigen::Matrix3Xd& po
                                                       const std::vector<std::uint32_t>& candidates, double radius) {
   const double cell = radius / std::sqrt(3.0);
   const CellGrid grid = build_cell_grid(points, candidates, 1.0 / cell);
-  UnionFind sets(grid.cells);
+  detail::UnionFind sets(grid.cells);
   join_neighbouring_cells(grid, radius * radius, sets);
   return collect_clusters(grid, candidates, sets);
 }

@@ -8,22 +8,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numeric>
 
 namespace quadrix {
 
 namespace {
-
-// Union-find over indices 0..n-1.
-struct Sets {
-  std::vector<std::size_t> parent;
-  explicit Sets(std::size_t count) : parent(count) { std::iota(parent.begin(), parent.end(), std::size_t(0)); }
-  std::size_t find(std::size_t a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-  }
-  void join(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
-};
 
 // One blob of a slice that could be a stem's section.
 struct Section {
@@ -36,12 +24,12 @@ struct Section {
 std::vector<std::vector<std::uint32_t>> blobs_of_slice(const std::vector<Eigen::Vector2d>& horizontal,
                                                        std::vector<std::uint32_t> slice, double link) {
   std::sort(slice.begin(), slice.end(), [&](std::uint32_t a, std::uint32_t b) { return horizontal[a].x() < horizontal[b].x(); });
-  Sets sets(slice.size());
-  for (std::size_t i = 0; i < slice.size(); ++i)
-    for (std::size_t j = i + 1; j < slice.size() && horizontal[slice[j]].x() - horizontal[slice[i]].x() <= link; ++j)
-      if ((horizontal[slice[j]] - horizontal[slice[i]]).squaredNorm() <= link * link) sets.join(i, j);
-  std::map<std::size_t, std::vector<std::uint32_t>> blobs;
-  for (std::size_t i = 0; i < slice.size(); ++i) blobs[sets.find(i)].push_back(slice[i]);
+  detail::UnionFind sets(slice.size());
+  for (std::uint32_t i = 0; i < slice.size(); ++i)
+    for (std::uint32_t j = i + 1; j < slice.size() && horizontal[slice[j]].x() - horizontal[slice[i]].x() <= link; ++j)
+      if ((horizontal[slice[j]] - horizontal[slice[i]]).squaredNorm() <= link * link) sets.unite(i, j);
+  std::map<std::uint32_t, std::vector<std::uint32_t>> blobs;
+  for (std::uint32_t i = 0; i < slice.size(); ++i) blobs[sets.find(i)].push_back(slice[i]);
   std::vector<std::vector<std::uint32_t>> result;
   for (auto& entry : blobs) result.push_back(std::move(entry.second));
   return result;
@@ -94,14 +82,14 @@ std::vector<std::vector<std::uint32_t>> find_stems(const Eigen::Matrix3Xd& point
     }
   // Stems: sections of slices up to two apart (one hidden by a branch or a gap between beams) whose
   // centres lie within link_offset of each other.
-  Sets chains(sections.size());
-  for (std::size_t a = 0; a < sections.size(); ++a)
-    for (std::size_t b = a + 1; b < sections.size(); ++b) {
+  detail::UnionFind chains(sections.size());
+  for (std::uint32_t a = 0; a < sections.size(); ++a)
+    for (std::uint32_t b = a + 1; b < sections.size(); ++b) {
       const long gap = std::abs(sections[b].slice - sections[a].slice);
-      if (gap >= 1 && gap <= 2 && (sections[a].centre - sections[b].centre).norm() <= options.link_offset) chains.join(a, b);
+      if (gap >= 1 && gap <= 2 && (sections[a].centre - sections[b].centre).norm() <= options.link_offset) chains.unite(a, b);
     }
-  std::map<std::size_t, std::vector<std::size_t>> members_of_chain;
-  for (std::size_t a = 0; a < sections.size(); ++a) members_of_chain[chains.find(a)].push_back(a);
+  std::map<std::uint32_t, std::vector<std::size_t>> members_of_chain;
+  for (std::uint32_t a = 0; a < sections.size(); ++a) members_of_chain[chains.find(a)].push_back(a);
   for (const auto& [root, chain] : members_of_chain) {
     long lowest = sections[chain.front()].slice, highest = lowest;
     std::vector<std::uint32_t> stem;

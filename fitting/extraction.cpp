@@ -205,7 +205,6 @@ void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::ui
     }
     std::vector<std::uint32_t> rest;
     found = extract_lines(points, clusters[c], options.lines, up, rest);
-    const bool had_line = !found.empty();
     // A trunk whose crown is above the top beam: its stem is thicker than a pole's and runs out of
     // the top of the view.
     if (options.trunks.enabled && options.trunks.crownless_minimum_radius > 0.0)
@@ -214,11 +213,11 @@ void lines_and_objects(const Eigen::Matrix3Xd& points, const std::vector<std::ui
                 options.trunks.crownless_minimum_radius &&
             stem_reaches_top_of_view(points, line.point_indices, in_range, options.trunks, up, options.sensor_origin))
           line.element_class = ElementClass::Trunk;
-    if (!had_line) {
+    if (found.empty()) {
       // Stems standing inside the cluster: a trunk in a hedge, a pole beside a car. They are Line
-      // elements whatever their thickness: the crownless trunk rule's radius across the view, applied
-      // to them, gave fewer successes on the synthetic tuning set (seeds 1001-1005, 300 pairs: 284
-      // against 286), since a stem measured from two places can fall on both sides of it.
+      // elements whatever their thickness: the crownless trunk rule's radius, applied to them, gave
+      // fewer successes on the synthetic tuning set (docs/modelling.md), since a stem measured from
+      // two places can fall on both sides of it.
       for (std::vector<std::uint32_t>& stem : find_stems(points, rest, options.stems, up)) {
         std::vector<std::uint32_t> left;
         std::set_difference(rest.begin(), rest.end(), stem.begin(), stem.end(), std::back_inserter(left));

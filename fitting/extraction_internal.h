@@ -6,11 +6,39 @@
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <numeric>
 #include <vector>
 
 namespace quadrix::detail {
+
+/// Disjoint sets over 0..size-1 with path halving; a set is named by its smallest member.
+class UnionFind {
+ public:
+  /// Every element in a set of its own.
+  explicit UnionFind(std::size_t size) : parent_(size) { std::iota(parent_.begin(), parent_.end(), 0u); }
+  /// The smallest member of x's set.
+  std::uint32_t find(std::uint32_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  /// Joins the sets of a and b; false when they were one already.
+  bool unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a == b) return false;
+    parent_[std::max(a, b)] = std::min(a, b);
+    return true;
+  }
+
+ private:
+  std::vector<std::uint32_t> parent_;
+};
 
 /// Milliseconds since `start`.
 inline double elapsed_ms(std::chrono::steady_clock::time_point start) {
