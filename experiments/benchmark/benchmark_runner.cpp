@@ -205,6 +205,9 @@ std::string model_key(const std::string& path, const std::string& side) { return
 BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input, const PointCloud& unmoved_source,
                               std::uint64_t seed, BenchRow& row) {
   const BenchPair& pair = *input.pair;
+  if (context.options->labels && (input.source->labels.empty() || input.target->labels.empty()))
+    throw Error("pair '" + pair.id + "': --labels needs per-point labels for both clouds (pairs.tsv columns " +
+                "source_labels / target_labels, or a label field in the cloud files)");
   const std::string& corruption = context.options->corruption;
   // A tilted source is resolved as given, tilted, for this trial only (auto measures its up axis, as
   // `quadrix register` would on a tilted scan); otherwise on the unmoved source, whose up axis the yaw
@@ -214,9 +217,6 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   const RegistrationOptions registration =
       context.options_for(tilted ? context.resolve(*input.source) : context.options_of(source_key, unmoved_source),
                           context.options_of(pair.target, *input.target));
-  if (context.options->labels && (input.source->labels.empty() || input.target->labels.empty()))
-    throw Error("pair '" + pair.id + "': --labels needs per-point labels for both clouds (pairs.tsv columns " +
-                "source_labels / target_labels, or a label field in the cloud files)");
   const bool perturbed = perturbs(*context.options);
   const bool own_source_model = perturbed || !context.options->corruption.empty();  // not the cached one
   const bool labelled = context.options->labels;
