@@ -6,6 +6,8 @@
 #include "geometry/error.h"
 #include "matching/max_clique.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -715,7 +717,10 @@ RegistrationResult register_modelled_clouds(const ModelledCloud& source, const M
   verify_registration(result, *source.cloud, *target.cloud, options);
   result.timings_ms["modelling_source"] = source_ms;
   result.timings_ms["modelling_target"] = target_ms;
-  result.timings_ms["total"] = source.modelling_ms + target.modelling_ms + elapsed_ms(start);
+  const bool concurrent = source.modelled_concurrently && target.modelled_concurrently;
+  result.timings_ms["total"] = (concurrent ? std::max(source.modelling_ms, target.modelling_ms)
+                                           : source.modelling_ms + target.modelling_ms) +
+                               elapsed_ms(start);
   result.counts.source_points = source.cloud->size();
   result.counts.target_points = target.cloud->size();
   result.counts.source_elements = source_modelling->extraction.elements.size();
@@ -737,13 +742,23 @@ RegistrationResult register_clouds(const PointCloud& source, const PointCloud& t
   ExtractionOptions target_extraction = options.target_extraction;
   if (!source_labels.empty()) source_extraction.semantic_mode = SemanticMode::Labels;
   if (!target_labels.empty()) target_extraction.semantic_mode = SemanticMode::Labels;
-  Clock::time_point start = Clock::now();
-  const ModellingResult source_modelling = model_scene(source, source_extraction, options.modelling, source_labels);
-  const double source_ms = elapsed_ms(start);
-  start = Clock::now();
-  const ModellingResult target_modelling = model_scene(target, target_extraction, options.modelling, target_labels);
-  const double target_ms = elapsed_ms(start);
-  return register_modelled_clouds({&source, &source_modelling, source_ms}, {&target, &target_modelling, target_ms}, options);
+  // The two clouds are modelled independently, so at the same time: on two cores this saves about the
+  // shorter of the two modelling times (measured in docs/registration.md, "Time").
+  ModellingResult source_modelling, target_modelling;
+  double source_ms = 0.0, target_ms = 0.0;
+  tbb::parallel_invoke(
+      [&] {
+        const Clock::time_point start = Clock::now();
+        source_modelling = model_scene(source, source_extraction, options.modelling, source_labels);
+        source_ms = elapsed_ms(start);
+      },
+      [&] {
+        const Clock::time_point start = Clock::now();
+        target_modelling = model_scene(target, target_extraction, options.modelling, target_labels);
+        target_ms = elapsed_ms(start);
+      });
+  return register_modelled_clouds({&source, &source_modelling, source_ms, true}, {&target, &target_modelling, target_ms, true},
+                                  options);
 }
 
 }  // namespace quadrix

@@ -193,7 +193,7 @@ bool augment_other_side(const PointCloud& cloud, ModellingResult& modelling, con
                         const ModellingOptions& options);
 
 /// Registers `source` onto `target` (paper Fig. overview): model_scene on both clouds with their
-/// extraction options, then register_modelled_clouds. Optional per-point SemanticKITTI labels switch
+/// extraction options, the two at the same time, then register_modelled_clouds. Optional per-point SemanticKITTI labels switch
 /// that side to the labels semantic mode. Degenerate input (empty clouds, one wall) gives a status.
 RegistrationResult register_clouds(const PointCloud& source, const PointCloud& target,
                                    const RegistrationOptions& options = {},
@@ -206,6 +206,9 @@ struct ModelledCloud {
   const PointCloud* cloud = nullptr;           ///< the cloud, in the frame the registration works in
   const ModellingResult* modelling = nullptr;  ///< model_scene of that cloud with its side's extraction options
   double modelling_ms = 0.0;                   ///< wall time that modelling took, ms (reported as the side's modelling time)
+  /// Both sides were modelled at the same time (register_clouds does): "total" then counts the longer
+  /// of the two modelling times, not their sum. Set on both sides or on neither.
+  bool modelled_concurrently = false;
 };
 
 /// A change applied to both models after augmentation and before matching (model-level ablations).
@@ -214,7 +217,7 @@ using ModelAdjustment = std::function<SceneModel(const SceneModel&)>;
 /// The pipeline after modelling, shared by register_clouds and the benchmark: the other side augmented
 /// when only one side was (augment_other_side, on a copy), `adjust_models` when given, register_models,
 /// then verify_registration on the clouds. Fills the counts of points and elements, the modelling
-/// timings and "total" (both modelling_ms plus this call).
+/// timings and "total" (both modelling_ms, or the longer when modelled_concurrently, plus this call).
 RegistrationResult register_modelled_clouds(const ModelledCloud& source, const ModelledCloud& target,
                                             const RegistrationOptions& options = {},
                                             const ModelAdjustment& adjust_models = {});

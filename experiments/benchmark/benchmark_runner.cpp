@@ -8,6 +8,8 @@
 #include "geometry/io.h"
 #include "matching/correspondences.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -109,7 +111,7 @@ class SharedCache {
   std::map<std::string, std::shared_future<std::shared_ptr<const Value>>> values_;
 };
 
-struct CachedModel {
+struct BuiltModel {
   ModellingResult modelling;  // the model with its elements (augment_other_side needs them)
   double modelling_ms = 0.0;
 };
@@ -170,7 +172,6 @@ struct RunContext {
   const BenchOptions* options = nullptr;
   RegistrationOptions base;   // preset-independent part: config + ablation applied per preset in options_for
   SharedCache<PointCloud> clouds;
-  SharedCache<CachedModel> models;
   std::mutex preset_mutex;
   std::map<std::string, RegistrationOptions> resolved;  // cloud path (and corruption) -> its options, resolved once (auto: measured, with up axis and crop)
 
@@ -198,7 +199,6 @@ struct RunContext {
   }
 };
 
-std::string model_key(const std::string& path, const std::string& side) { return side + "|" + path; }
 
 // `unmoved_source` is the source before any perturbation (damaged when a corruption is set): the
 // options are resolved on it, as `quadrix register` would resolve them on the file it is given.
@@ -218,42 +218,37 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
       context.options_for(tilted ? context.resolve(*input.source) : context.options_of(source_key, unmoved_source),
                           context.options_of(pair.target, *input.target));
   const bool perturbed = perturbs(*context.options);
-  const bool own_source_model = perturbed || !context.options->corruption.empty();  // not the cached one
   const bool labelled = context.options->labels;
   const std::vector<ElementClass>& label_classes = context.options->label_classes;
-  const auto build = [&](const PointCloud& cloud, ExtractionOptions extraction, const ModellingOptions& modelling) {
-    CachedModel cached;
+  const auto build = [&](const PointCloud& cloud, ExtractionOptions extraction, const ModellingOptions& modelling,
+                         BuiltModel& built) {
     if (labelled) {
       extraction.semantic_mode = SemanticMode::Labels;
       extraction.label_classes = label_classes;
     }
     const Clock::time_point start = Clock::now();
-    cached.modelling = model_scene(cloud, extraction, modelling, labelled ? cloud.labels : std::vector<std::uint32_t>());
-    cached.modelling_ms = elapsed_ms(start);
-    return cached;
+    built.modelling = model_scene(cloud, extraction, modelling, labelled ? cloud.labels : std::vector<std::uint32_t>());
+    built.modelling_ms = elapsed_ms(start);
   };
-  std::shared_ptr<const CachedModel> source_model;
-  if (own_source_model) {
-    // The perturbed sensor sits at the perturbation's origin with its up axis rotated: tell extraction.
-    ExtractionOptions extraction = registration.source_extraction;
-    extraction.sensor_origin = input.perturbation * extraction.sensor_origin;
-    if (!tilted) extraction.up = input.perturbation.linear() * extraction.up;
-    source_model = std::make_shared<const CachedModel>(build(*input.source, extraction, registration.modelling));
-  } else {
-    source_model = context.models.get(model_key(pair.source, "source"), [&] {
-      return build(*input.source, registration.source_extraction, registration.modelling);
-    });
+  // The perturbed sensor sits at the perturbation's origin with its up axis rotated: tell extraction.
+  ExtractionOptions source_extraction = registration.source_extraction;
+  if (perturbed) {
+    source_extraction.sensor_origin = input.perturbation * source_extraction.sensor_origin;
+    if (!tilted) source_extraction.up = input.perturbation.linear() * source_extraction.up;
   }
-  std::shared_ptr<const CachedModel> target_model = context.models.get(
-      model_key(pair.target, "target"), [&] { return build(*input.target, registration.target_extraction, registration.modelling); });
-  // The same pipeline as register_clouds from here on, with the cached models. A perturbed source's
+  // Both clouds are modelled for every task, at the same time, as register_clouds does, so the row's
+  // times are those of `quadrix register` with both clouds in memory (no model is reused across pairs).
+  BuiltModel source_model, target_model;
+  tbb::parallel_invoke([&] { build(*input.source, source_extraction, registration.modelling, source_model); },
+                       [&] { build(*input.target, registration.target_extraction, registration.modelling, target_model); });
+  // The same pipeline as register_clouds from here on. A perturbed source's
   // sensor sits at the perturbation's origin: its range crop in the verification follows it.
   RegistrationOptions pipeline = registration;
   if (perturbed) pipeline.source_extraction.sensor_origin = input.perturbation * registration.source_extraction.sensor_origin;
   const std::string& ablation = context.options->ablation;
   const RegistrationResult result = register_modelled_clouds(
-      {input.source, &source_model->modelling, source_model->modelling_ms},
-      {input.target, &target_model->modelling, target_model->modelling_ms}, pipeline,
+      {input.source, &source_model.modelling, source_model.modelling_ms, true},
+      {input.target, &target_model.modelling, target_model.modelling_ms, true}, pipeline,
       [&ablation](const SceneModel& model) { return apply_model_ablation(ablation, model); });
   BenchMethodOutput output;
   output.transform = result.transform;
@@ -388,11 +383,6 @@ std::vector<BenchRow> run_task(RunContext& context, const Task& task) {
     }
     rows.push_back(std::move(row));
   }
-  const bool quadrix_ran = std::find(options.methods.begin(), options.methods.end(), "quadrix") != options.methods.end();
-  if (quadrix_ran) {
-    if (!perturbed && corruption.kind == CorruptionKind::None) context.models.release(model_key(pair.source, "source"));
-    context.models.release(model_key(pair.target, "target"));
-  }
   context.clouds.release(pair.source);
   context.clouds.release(pair.target);
   return rows;
@@ -521,8 +511,6 @@ std::vector<BenchRow> run_benchmark(const std::vector<BenchPair>& pairs, const B
   context.pairs = &pairs;
   context.options = &options;
   std::vector<Task> tasks;
-  const bool perturbing = perturbs(options);
-  const bool quadrix_runs = std::find(options.methods.begin(), options.methods.end(), "quadrix") != options.methods.end();
   for (std::size_t p = 0; p < pairs.size(); ++p)
     for (int trial = 0; trial < options.trials; ++trial) {
       const std::size_t index = p * static_cast<std::size_t>(options.trials) + static_cast<std::size_t>(trial);
@@ -530,10 +518,6 @@ std::vector<BenchRow> run_benchmark(const std::vector<BenchPair>& pairs, const B
       tasks.push_back(Task{index, p, trial});
       context.clouds.expect(pairs[p].source);
       context.clouds.expect(pairs[p].target);
-      if (quadrix_runs) {
-        if (!perturbing && options.corruption.empty()) context.models.expect(model_key(pairs[p].source, "source"));
-        context.models.expect(model_key(pairs[p].target, "target"));
-      }
     }
 
   std::vector<std::vector<BenchRow>> results(tasks.size());

@@ -324,11 +324,17 @@ TEST_F(BenchFolder, QuadrixOnRealKittiPairsWithAndWithoutYawTrials) {
     EXPECT_GE(row.inliers, 3) << row.pair_id;
     EXPECT_EQ(row.recalled, 1) << row.pair_id;
     EXPECT_GT(row.source_model_bytes, 0);
-    EXPECT_EQ(row.target_model_bytes, plain[0].target_model_bytes);  // one shared target model
+    EXPECT_EQ(row.target_model_bytes, plain[0].target_model_bytes);  // the same target, modelled alike per pair
     for (const char* stage : {"modelling_source", "modelling_target", "correspondences", "cliques", "estimation", "total"})
       EXPECT_TRUE(row.timings_ms.count(stage)) << stage;
+    // Both clouds are modelled at the same time, as register_clouds does: the total holds the longer
+    // modelling time and every later stage, not the two modellings one after the other.
+    double later_stages = 0.0;
+    for (const auto& [stage, ms] : row.timings_ms)
+      if (stage != "total" && stage.rfind("modelling_", 0) != 0) later_stages += ms;
+    EXPECT_GE(row.timings_ms.at("total"),
+              std::max(row.timings_ms.at("modelling_source"), row.timings_ms.at("modelling_target")) + later_stages);
   }
-  EXPECT_EQ(plain[0].timings_ms.at("modelling_target"), plain[1].timings_ms.at("modelling_target"));  // built once
 
   // The no-refinement ablation keeps each candidate's SVD estimate (not the identity).
   BenchOptions unrefined = options;
