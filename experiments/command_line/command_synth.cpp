@@ -27,6 +27,7 @@ struct SynthCommandOptions {
   bool ascii = false;                  ///< ascii clouds instead of binary
   std::optional<double> noise;         ///< range noise sigma override, metres
   std::optional<double> dropout;       ///< dropout probability override
+  std::string foliage = "solid";       ///< street vegetation: solid or porous (crowns and hedges)
   bool list = false;                   ///< list scenes and sensors, then exit
   LoopClosureSetOptions loop_set;      ///< loop-closures only: streets, pairs per bin, scan spacing
 };
@@ -67,6 +68,7 @@ void run_command(const SynthCommandOptions& options) {
     if (options.format != "ply" || options.ascii) throw Error("synth loop-closures: writes binary PLY only (no --format pcd, no --ascii)");
     LoopClosureSetOptions loop_set = options.loop_set;
     loop_set.first_seed = options.seed;
+    loop_set.street.foliage = foliage_from_name(options.foliage, "--foliage");
     loop_set.sensor = sensor;
     const auto start = std::chrono::steady_clock::now();
     const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(options.out, loop_set);
@@ -90,7 +92,9 @@ void run_command(const SynthCommandOptions& options) {
   output.binary = !options.ascii;
 
   const auto start = std::chrono::steady_clock::now();
-  const Scene scene = make_scene(options.scene, options.seed);
+  StreetOptions street;
+  street.foliage = foliage_from_name(options.foliage, "--foliage");
+  const Scene scene = make_scene(options.scene, options.seed, street);
   const auto poses = options.poses.empty() ? default_sensor_poses(scene, sensor) : parse_pose_spec(options.poses);
   const SyntheticRun run = run_synthetic(scene, sensor, poses, options.seed);
   const auto simulated = std::chrono::steady_clock::now();
@@ -128,6 +132,9 @@ const CommandRegistration registration(20, [](CLI::App& app) {
   command->add_flag("--ascii", options->ascii, "Write ascii clouds instead of binary");
   command->add_option("--noise", options->noise, "Gaussian range noise sigma in metres (overrides the preset)");
   command->add_option("--dropout", options->dropout, "Probability that a return is lost (overrides the preset)");
+  command->add_option("--foliage", options->foliage,
+                      "street, loop-closures: solid tree crowns, or porous crowns and hedges that rays enter")
+      ->capture_default_str();
   command->add_option("--streets", options->loop_set.streets, "loop-closures: number of street layouts")->capture_default_str();
   command->add_option("--pairs-per-bin", options->loop_set.pairs_per_bin, "loop-closures: pairs per street and distance bin")
       ->capture_default_str();

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "experiments/synthetic/scanner_simulator.h"
+#include "experiments/synthetic/synthetic_scene.h"
 
 #include <cstdint>
 #include <string>
@@ -21,6 +22,7 @@ struct LoopClosureSetOptions {
   double scan_spacing = 3.0;        ///< metres between consecutive scans of a pass
   int pairs_per_bin = 20;           ///< pairs drawn per street and bin (fewer when a bin has fewer)
   std::vector<std::pair<double, double>> bins{{0.0, 10.0}, {10.0, 20.0}, {20.0, 30.0}};  ///< [min, max) distance bins, m
+  StreetOptions street;             ///< options of every street layout (solid or porous foliage)
 };
 
 /// One pair of the set, as written to pairs.tsv.

@@ -40,6 +40,8 @@ MeshRayCaster::MeshRayCaster(const Scene& scene, int resolution) : tree_(std::ma
   if (resolution < 3 || resolution > 4096)
     throw Error("MeshRayCaster: resolution must be 3..4096, got " + std::to_string(resolution));
   for (const ScenePrimitive& primitive : scene.primitives) {
+    if (primitive.mean_free_path > 0.0)
+      throw Error("MeshRayCaster: primitive '" + primitive.name + "' is a porous volume, which a mesh cannot stand for");
     const QuadricDecomposition shape = primitive_shape(primitive);
     const TriangleMesh mesh = mesh_surface(shape, primitive.extent, resolution);
     const Eigen::Isometry3d world_to_local = primitive.pose.inverse();

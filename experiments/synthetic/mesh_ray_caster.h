@@ -20,7 +20,7 @@ class MeshRayCaster {
  public:
   /// Meshes every primitive at `resolution` segments per parametric direction (mesh_surface),
   /// keeps the triangles whose centroid lies inside the primitive's bounds (extent and polygon),
-  /// and builds the AABB tree. Throws quadrix::Error for resolution outside 3..4096.
+  /// and builds the AABB tree. Throws quadrix::Error for resolution outside 3..4096 or a porous primitive.
   explicit MeshRayCaster(const Scene& scene, int resolution = 64);
   ~MeshRayCaster();
   MeshRayCaster(const MeshRayCaster&) = delete;

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -269,6 +270,31 @@ int intersect_prepared(const PreparedPrimitive& primitive, const Eigen::Vector3d
   return count;
 }
 
+/// Where the ray stops on `primitive` within (t_min, t_max], or +inf where it does not. A solid
+/// surface stops it at its first intersection. A porous volume (ScenePrimitive::mean_free_path) lets
+/// it travel an exponentially distributed depth past its entry (Beer-Lambert attenuation), drawn from
+/// the ray and the primitive, so one ray always stops at one place: it stops there when that is
+/// before its exit, else passes through. A ray that meets the volume's surface once leaves it through
+/// its cut (a hedge's, under the sidewalk) and is not limited by an exit.
+double stopping_range(const PreparedPrimitive& primitive, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                      double t_min, double t_max) {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  std::array<double, 2> hits{};
+  const double free_path = primitive.source->mean_free_path;
+  if (!(free_path > 0.0)) return intersect_prepared(primitive, origin, direction, t_min, t_max, hits) > 0 ? hits[0] : kNone;
+  const int count = intersect_prepared(primitive, origin, direction, t_min, kNone, hits);
+  if (count == 0) return kNone;
+  std::uint64_t key = mix_bits(0xF011A6EULL + primitive.source->id);
+  for (const double value : {origin.x(), origin.y(), origin.z(), direction.x(), direction.y(), direction.z()}) {
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &value, sizeof bits);
+    key = mix_bits(key ^ bits);
+  }
+  const double range = hits[0] - free_path * std::log(1.0 - unit_interval_from_bits(key));
+  const double exit = count == 2 ? hits[1] : kNone;
+  return range < exit && range <= t_max ? range : kNone;
+}
+
 PreparedPrimitive prepare(const ScenePrimitive& primitive) {
   PreparedPrimitive prepared;
   prepared.source = &primitive;
@@ -369,16 +395,14 @@ struct RayCaster::Impl {
 
   void nearest_in_leaf(const HierarchyNode& node, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                        double t_min, RayHit& best, double& limit) const {
-    std::array<double, 2> hits{};
     for (int i = node.first; i < node.first + node.count; ++i) {
       const PreparedPrimitive& primitive = prepared[static_cast<std::size_t>(i)];
-      if (intersect_prepared(primitive, origin, direction, t_min, limit, hits) > 0) {
-        // Equal ranges (shared edges) resolve to the lower id for determinism.
-        if (hits[0] < limit || static_cast<std::int32_t>(primitive.source->id) < best.primitive) {
-          limit = hits[0];
-          best.range = hits[0];
-          best.primitive = static_cast<std::int32_t>(primitive.source->id);
-        }
+      const double range = stopping_range(primitive, origin, direction, t_min, limit);
+      // Equal ranges (shared edges) resolve to the lower id for determinism.
+      if (range < limit || (range == limit && static_cast<std::int32_t>(primitive.source->id) < best.primitive)) {
+        limit = range;
+        best.range = range;
+        best.primitive = static_cast<std::int32_t>(primitive.source->id);
       }
     }
   }
@@ -434,14 +458,14 @@ RayHit RayCaster::cast_brute_force(const Eigen::Vector3d& origin, const Eigen::V
                                    double min_range, double max_range) const {
   RayHit best;
   double limit = max_range;
-  std::array<double, 2> hits{};
   // Visit in id order so ties resolve to the lower id, as the hierarchy does.
   std::vector<const PreparedPrimitive*> by_id(impl_->prepared.size());
   for (const auto& prepared : impl_->prepared) by_id[prepared.source->id] = &prepared;
   for (const PreparedPrimitive* primitive : by_id) {
-    if (intersect_prepared(*primitive, origin, unit_direction, min_range, limit, hits) > 0 && hits[0] < limit) {
-      limit = hits[0];
-      best.range = hits[0];
+    const double range = stopping_range(*primitive, origin, unit_direction, min_range, limit);
+    if (range < limit) {
+      limit = range;
+      best.range = range;
       best.primitive = static_cast<std::int32_t>(primitive->source->id);
     }
   }

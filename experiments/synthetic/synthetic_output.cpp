@@ -194,6 +194,7 @@ std::string primitives_json(const Scene& scene, int record_samples) {
     ordered_json polygon = ordered_json::array();
     for (const auto& vertex : primitive.polygon) polygon.push_back(vector_json(vertex));
     entry["polygon"] = polygon;
+    if (primitive.mean_free_path > 0.0) entry["mean_free_path"] = primitive.mean_free_path;
     entry["area_m2"] = tidy(primitive_surface_area(primitive));
     entry["surface_quadric"] = vector_json(surface_quadric(primitive).parameters());
     entry["model_quadric"] = vector_json(model_quadric(primitive).parameters());
@@ -212,6 +213,7 @@ std::string primitives_json(const Scene& scene, int record_samples) {
        "cone: a^2/sa^2 + b^2/sb^2 = c^2 (scale = tan of half-angles, 1)"},
       {"extent", "surface kept where canonical coordinates lie in [minimum, maximum] (a ignored for planes)"},
       {"polygon", "planes only: convex polygon in (b, c), counter-clockwise, further bounding the surface"},
+      {"mean_free_path", "porous volumes (foliage) only: mean depth, m, a ray travels inside before it stops"},
       {"quadric", "10 parameters A..J of x^T Q x = 0 (paper Eq. quadrics equation), Quadric::from_canonical"},
       {"record", "21 numbers of paper Struct. 1: label, q(10), full scale(3), full rotation quaternion w,x,y,z(4), "
                  "full centre(3), from the model quadric and the statistics of true surface samples"}};

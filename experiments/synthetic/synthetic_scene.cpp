@@ -454,14 +454,21 @@ std::string scene_description(const std::string& name) {
   throw Error("scene: unknown name '" + name + "' (expected street, corridor or monument)");
 }
 
-Scene make_scene(const std::string& name, std::uint64_t seed) {
-  if (name == "street") return make_street_scene(seed);
+Foliage foliage_from_name(const std::string& name, const std::string& context) {
+  if (name == "solid") return Foliage::Solid;
+  if (name == "porous") return Foliage::Porous;
+  throw Error(context + ": expected solid or porous, got '" + name + "'");
+}
+
+Scene make_scene(const std::string& name, std::uint64_t seed, const StreetOptions& street) {
+  if (name == "street") return make_street_scene(seed, street);
+  if (street.foliage != Foliage::Solid) throw Error("scene '" + name + "': only the street has foliage to make porous");
   if (name == "corridor") return make_corridor_scene(seed);
   if (name == "monument") return make_monument_scene(seed);
   throw Error("scene: unknown name '" + name + "' (expected street, corridor or monument)");
 }
 
-Scene make_street_scene(std::uint64_t seed) {
+Scene make_street_scene(std::uint64_t seed, const StreetOptions& options) {
   Scene scene;
   scene.name = "street";
   scene.seed = seed;
@@ -654,6 +661,35 @@ Scene make_street_scene(std::uint64_t seed) {
     scene.default_tls_stations.push_back(
         make_pose(Eigen::Matrix3d::Identity(), Eigen::Vector3d(x, station % 2 == 0 ? -1.0 : 1.0, ground_height(x) + 1.8)));
   }
+  if (options.foliage == Foliage::Porous) {
+    // Foliage a LiDAR sees into: crowns and hedges stop a ray at an exponential depth inside them. A
+    // mean free path of 0.4 m spreads a crown's returns through its outer metre, as leaves do. The
+    // hedges are drawn from their own stream, so the rest of the layout is that of solid foliage.
+    constexpr double kFoliageMeanFreePath = 0.4;
+    for (ScenePrimitive& primitive : scene.primitives)
+      if (primitive.label == SemanticLabel::Vegetation) primitive.mean_free_path = kFoliageMeanFreePath;
+    PortableRandom hedge_random(mix_bits(seed ^ 0x4ED6E5ULL));
+    int hedge_count = 0;
+    for (int side_index = 0; side_index < 2; ++side_index) {
+      const double side = side_index == 0 ? -1.0 : 1.0;
+      double x = -half_length + hedge_random.uniform(1.0, 6.0);
+      while (x < half_length - 3.0) {
+        const double length = std::min(hedge_random.uniform(2.0, 9.0), half_length - 1.0 - x);
+        if (length > 1.5 && hedge_random.bernoulli(0.8)) {
+          // An ellipsoid along the facade, its lower part cut below the sidewalk (hidden under it).
+          const double half_width = hedge_random.uniform(0.4, 0.8), height = hedge_random.uniform(0.8, 2.0);
+          const double center_x = x + 0.5 * length;
+          const Eigen::Vector3d center(center_x, side * (facade_line - half_width - 0.1),
+                                       ground_height(center_x) + kerb_height + 0.1 * height);
+          builder.ellipsoid(numbered("hedge", hedge_count++), SemanticLabel::Vegetation, center,
+                            Eigen::AngleAxisd(std::atan(gradient), -Eigen::Vector3d::UnitY()).toRotationMatrix(),
+                            Eigen::Vector3d(0.5 * length, half_width, 0.9 * height), -0.3 * height, 0.9 * height);
+          scene.primitives.back().mean_free_path = kFoliageMeanFreePath;
+        }
+        x += length + hedge_random.uniform(0.5, 4.0);
+      }
+    }
+  }
   return scene;
 }
 
@@ -733,10 +769,10 @@ void add_pedestrians(SceneBuilder& builder, PortableRandom& random, const Street
 
 }  // namespace
 
-StreetPass make_street_pass(std::uint64_t seed, int pass, double scan_spacing) {
+StreetPass make_street_pass(std::uint64_t seed, int pass, double scan_spacing, const StreetOptions& options) {
   if (pass < 1) throw Error("make_street_pass: pass must be at least 1, got " + std::to_string(pass));
   if (!(scan_spacing > 0.0)) throw Error("make_street_pass: scan_spacing must be positive, got " + std::to_string(scan_spacing));
-  const Scene street = make_street_scene(seed);
+  const Scene street = make_street_scene(seed, options);
   const StreetMeasures measures = measure_street(street);
   PortableRandom random(mix_bits(seed * 1000003ULL + static_cast<std::uint64_t>(pass)));
   StreetPass result;

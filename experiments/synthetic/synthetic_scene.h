@@ -75,6 +75,10 @@ struct ScenePrimitive {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< canonical frame -> world
   LocalExtent extent;                                      ///< bounds of the surface in the canonical frame
   std::vector<Eigen::Vector2d> polygon;                    ///< planes only: optional convex polygon (b, c), counter-clockwise, further bounding the rectangle
+  /// > 0: a porous volume (foliage) bounded by the closed surface: a ray that enters it stops after
+  /// an exponentially distributed depth with this mean, metres, or passes through when that depth
+  /// exceeds its chord. 0: a solid surface (the ray stops where it meets it).
+  double mean_free_path = 0.0;
 };
 
 /// A scene: its primitives plus the default sensor placements a user gets without --poses.
@@ -91,23 +95,37 @@ struct Scene {
 std::vector<std::string> scene_names();
 /// One-line description of a scene name; throws quadrix::Error for unknown names.
 std::string scene_description(const std::string& name);
-/// Builds a scene by name ("street", "corridor", "monument"); throws quadrix::Error for unknown names.
-Scene make_scene(const std::string& name, std::uint64_t seed);
+/// How the street scene's vegetation is simulated.
+enum class Foliage {
+  Solid,   ///< tree crowns are closed ellipsoid surfaces (the default)
+  Porous,  ///< crowns are porous volumes, and hedges line the facades (ScenePrimitive::mean_free_path)
+};
+/// Parses "solid" or "porous"; throws quadrix::Error naming `context` otherwise.
+Foliage foliage_from_name(const std::string& name, const std::string& context);
+/// Options of the street scene beyond its seed.
+struct StreetOptions {
+  Foliage foliage = Foliage::Solid;  ///< solid crowns, or porous crowns plus hedges
+};
+/// Builds a scene by name ("street", "corridor", "monument"); `street` applies to the street only.
+/// Throws quadrix::Error for unknown names and for porous foliage asked of another scene.
+Scene make_scene(const std::string& name, std::uint64_t seed, const StreetOptions& street = {});
 /// KITTI-like urban block with a random layout per seed (sloped road, recessed facades, poles,
-/// trees, parked cars, kerbs, bollards, traffic cones), closed by cross facades at both ends.
-Scene make_street_scene(std::uint64_t seed);
+/// trees, parked cars, kerbs, bollards, traffic cones), closed by cross facades at both ends. With
+/// porous foliage the crowns let rays in (mean free path 0.4 m) and porous hedges 0.8-2 m tall
+/// and 2-9 m long line most of the facades; everything else is drawn as with solid foliage.
+Scene make_street_scene(std::uint64_t seed, const StreetOptions& options = {});
 /// One drive along a street scene: the scene as that drive saw it and the sensor poses of its scans.
 struct StreetPass {
   Scene scene;                                ///< the street with this pass's parked cars and pedestrians
   std::vector<Eigen::Isometry3d> poses;       ///< sensor -> world, one per scan, in driving order
 };
-/// A drive along make_street_scene(seed): the same road, buildings, poles and trees, with the parked
+/// A drive along make_street_scene(seed, options): the same road, buildings, poles and trees, with the parked
 /// cars re-drawn (each kept with probability 0.5, new ones in free kerb space) and 6-14 pedestrians,
 /// all drawn from (seed, pass). Odd passes drive +x in the right lane, even passes -x in the left lane
 /// (the opposite direction); one scan every `scan_spacing` metres for x in [-48, 48] (even passes offset
 /// by half a spacing), each with +-0.5 m of lateral and +-4 degrees of heading jitter. Throws
 /// quadrix::Error when pass < 1 or scan_spacing is not positive.
-StreetPass make_street_pass(std::uint64_t seed, int pass, double scan_spacing);
+StreetPass make_street_pass(std::uint64_t seed, int pass, double scan_spacing, const StreetOptions& options = {});
 /// Long straight road between continuous barriers and noise walls with evenly spaced poles and no
 /// end walls: translation along the road is unobservable (degenerate registration).
 Scene make_corridor_scene(std::uint64_t seed);

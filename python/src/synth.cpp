@@ -16,7 +16,7 @@ void bind_synth(py::module_& module) {
       "synth",
       [](const std::string& scene_name, std::uint64_t seed, const std::string& sensor_name, const py::object& poses,
          std::optional<double> noise, std::optional<double> dropout, bool primitives, const py::object& out,
-         const std::string& format, bool binary) {
+         const std::string& format, bool binary, const std::string& foliage) {
         SensorModel sensor = sensor_preset(sensor_name);
         if (noise) {
           if (!(*noise >= 0.0)) throw py::value_error("noise: expected a range noise sigma >= 0 in metres");
@@ -49,7 +49,9 @@ void bind_synth(py::module_& module) {
         std::string primitives_text;
         {
           py::gil_scoped_release release;
-          const Scene scene = make_scene(scene_name, seed);
+          StreetOptions street;
+          street.foliage = foliage_from_name(foliage, "foliage");
+          const Scene scene = make_scene(scene_name, seed, street);
           if (pose_spec) sensor_poses = parse_pose_spec(*pose_spec);
           if (sensor_poses.empty() && !pose_spec) sensor_poses = default_sensor_poses(scene, sensor);
           run = run_synthetic(scene, sensor, sensor_poses, seed);
@@ -87,7 +89,8 @@ void bind_synth(py::module_& module) {
       },
       py::arg("scene") = "street", py::arg("seed") = 1, py::arg("sensor") = "hdl64", py::arg("poses") = py::none(),
       py::arg("noise") = py::none(), py::arg("dropout") = py::none(), py::arg("primitives") = true,
-      py::arg("out") = py::none(), py::arg("format") = "ply", py::arg("binary") = true, R"doc(
+      py::arg("out") = py::none(), py::arg("format") = "ply", py::arg("binary") = true, py::arg("foliage") = "solid",
+      R"doc(
 Simulates scans of a built-in scene with exact ground truth, as ``quadrix synth`` does (same seed,
 same clouds). Returns a dict:
 
@@ -106,7 +109,8 @@ seed: layout and noise seed. poses: None (the scene's default LiDAR pair, or its
 for tls), a POSE_SPEC string "x,y,z,yaw_deg[,pitch_deg[,roll_deg]];..." or pose file, or a list of
 4x4 sensor -> world matrices. noise: range noise sigma override, m. dropout: return-loss
 probability override. out: also write the ``quadrix synth --out`` folder there (format ply|pcd,
-binary or ASCII).
+binary or ASCII). foliage (street only): "solid" crowns, or "porous" crowns and hedges that rays
+enter (``quadrix synth --foliage``).
 
 Example::
 

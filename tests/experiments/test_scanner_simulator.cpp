@@ -196,6 +196,72 @@ TEST(RayCaster, HierarchyAgreesWithBruteForce) {
       EXPECT_GT(hits, 1000) << scene.name;
     }
   }
+  // Porous foliage: the hierarchy and brute force stop every ray at the same place inside the crowns
+  // and hedges too.
+  StreetOptions porous;
+  porous.foliage = Foliage::Porous;
+  const Scene street = make_street_scene(3, porous);
+  const RayCaster caster(street);
+  std::mt19937_64 engine(3);
+  std::normal_distribution<double> normal;
+  const Eigen::Vector3d origin = street.default_lidar_poses[0].translation();
+  int foliage_hits = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Eigen::Vector3d direction = Eigen::Vector3d(normal(engine), normal(engine), 0.3 * normal(engine)).normalized();
+    const RayHit fast = caster.cast(origin, direction, 0.0, 150.0);
+    const RayHit reference = caster.cast_brute_force(origin, direction, 0.0, 150.0);
+    ASSERT_EQ(fast.primitive, reference.primitive) << "ray " << i;
+    if (fast.hit()) {
+      ASSERT_EQ(fast.range, reference.range);
+      foliage_hits += street.primitives[static_cast<std::size_t>(fast.primitive)].mean_free_path > 0.0;
+    }
+  }
+  EXPECT_GT(foliage_hits, 100);
+}
+
+// A porous sphere stops a ray at an exponential depth past its entry (Beer-Lambert): rays through its
+// centre pass with probability exp(-chord / mean free path), the stops fall inside the sphere with the
+// truncated exponential's mean depth, and one ray always stops at the same place.
+TEST(RayCaster, PorousVolumeStopsRaysAtExponentialDepths) {
+  Scene scene;
+  scene.name = "porous";
+  ScenePrimitive crown;
+  crown.name = "crown";
+  crown.label = SemanticLabel::Vegetation;
+  crown.surface_type = crown.model_type = QuadricType::Sphere;
+  crown.scale = Eigen::Vector3d::Constant(1.0);
+  crown.pose.translation() = Eigen::Vector3d(10, 0, 0);
+  crown.extent.minimum = Eigen::Vector3d::Constant(-1.0);
+  crown.extent.maximum = Eigen::Vector3d::Constant(1.0);
+  crown.mean_free_path = 0.8;
+  scene.primitives.push_back(crown);
+  const RayCaster caster(scene);
+  std::mt19937_64 engine(5);
+  std::uniform_real_distribution<double> height(-1e-3, 1e-3);  // distinct rays through the centre
+  const int rays = 20000;
+  int stopped = 0;
+  double depth_sum = 0.0;
+  for (int i = 0; i < rays; ++i) {
+    const Eigen::Vector3d origin(0.0, height(engine), height(engine));
+    const Eigen::Vector3d direction = (Eigen::Vector3d(10, 0, 0) - origin).normalized();
+    const RayHit hit = caster.cast(origin, direction, 0.0, 100.0);
+    const RayHit again = caster.cast(origin, direction, 0.0, 100.0);
+    ASSERT_EQ(hit.primitive, again.primitive);
+    if (!hit.hit()) continue;
+    ASSERT_EQ(hit.range, again.range);
+    ASSERT_GE(hit.range, 9.0 - 1e-6);
+    ASSERT_LE(hit.range, 11.0 + 1e-6);
+    ++stopped;
+    depth_sum += hit.range - 9.0;
+  }
+  // Chord 2 m, mean free path 0.8 m: P(stop) = 1 - exp(-2.5) = 0.918; the stops' mean depth is
+  // l - L e^(-L/l) / (1 - e^(-L/l)) = 0.621 m. Standard errors: 0.0019 and about 0.004 (5 sigma within).
+  const double expected_stop = 1.0 - std::exp(-2.0 / 0.8);
+  EXPECT_NEAR(static_cast<double>(stopped) / rays, expected_stop, 0.01);
+  const double expected_depth = 0.8 - 2.0 * std::exp(-2.0 / 0.8) / expected_stop;
+  EXPECT_NEAR(depth_sum / stopped, expected_depth, 0.02);
+  // The mesh caster has no porous surfaces and says so.
+  EXPECT_THROW(MeshRayCaster(scene, 8), Error);
 }
 
 // The meshed alternative (CGAL AABB tree, measured in microbenchmark_simulator) sees the same surfaces: on

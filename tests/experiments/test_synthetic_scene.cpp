@@ -81,6 +81,45 @@ TEST(Street, SameSeedIsIdenticalAndOtherSeedsDiffer) {
   EXPECT_EQ(layouts.size(), 6u) << "every seed must give its own layout";
 }
 
+// Porous foliage changes the vegetation only: the solid layout, primitive for primitive, with porous
+// crowns, plus porous hedges 0.8-2 m tall standing on the sidewalks along the facades.
+TEST(Street, PorousFoliageKeepsTheLayoutAndAddsHedges) {
+  StreetOptions porous;
+  porous.foliage = Foliage::Porous;
+  for (std::uint64_t seed = 1; seed < 6; ++seed) {
+    const Scene solid = make_street_scene(seed);
+    const Scene leafy = make_street_scene(seed, porous);
+    ASSERT_GT(leafy.primitives.size(), solid.primitives.size());
+    int crowns = 0, hedges = 0;
+    for (std::size_t i = 0; i < leafy.primitives.size(); ++i) {
+      const ScenePrimitive& primitive = leafy.primitives[i];
+      if (i < solid.primitives.size()) {
+        EXPECT_EQ(primitive.name, solid.primitives[i].name);
+        EXPECT_TRUE(primitive.pose.isApprox(solid.primitives[i].pose));
+        EXPECT_EQ(primitive.mean_free_path > 0.0, primitive.label == SemanticLabel::Vegetation) << primitive.name;
+        EXPECT_EQ(solid.primitives[i].mean_free_path, 0.0);
+        crowns += primitive.label == SemanticLabel::Vegetation;
+        continue;
+      }
+      ++hedges;
+      EXPECT_EQ(primitive.name.rfind("hedge_", 0), 0u) << primitive.name;
+      EXPECT_EQ(primitive.label, SemanticLabel::Vegetation);
+      EXPECT_GT(primitive.mean_free_path, 0.0);
+      // Top 0.8-2 m above the sidewalk (its centre stands at a tenth of its height), the cut below it.
+      const double top = primitive.pose.translation().z() + primitive.extent.maximum.z();
+      const double bottom = primitive.pose.translation().z() + primitive.extent.minimum.z();
+      const double sidewalk = primitive.pose.translation().z() - 0.1 * primitive.extent.maximum.z() / 0.9;
+      EXPECT_GE(top - sidewalk, 0.8 - 0.05);
+      EXPECT_LE(top - sidewalk, 2.0 + 0.05);
+      EXPECT_LT(bottom, sidewalk);
+    }
+    EXPECT_GT(crowns, 0);
+    EXPECT_GE(hedges, 10) << "seed " << seed;
+  }
+  EXPECT_THROW(make_scene("corridor", 1, porous), Error);
+  EXPECT_THROW(foliage_from_name("leafy", "--foliage"), Error);
+}
+
 TEST(Street, EverySeedHasEveryStreetClass) {
   for (std::uint64_t seed = 0; seed < 20; ++seed) {
     const Scene scene = make_street_scene(seed);
