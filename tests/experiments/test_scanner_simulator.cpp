@@ -34,6 +34,19 @@ std::vector<QuadricDecomposition> surface_shapes(const Scene& scene) {
   return shapes;
 }
 
+/// A sphere of radius 1 at `centre`.
+ScenePrimitive unit_sphere(const std::string& name, SemanticLabel label, const Eigen::Vector3d& centre) {
+  ScenePrimitive sphere;
+  sphere.name = name;
+  sphere.label = label;
+  sphere.surface_type = sphere.model_type = QuadricType::Sphere;
+  sphere.scale = Eigen::Vector3d::Constant(1.0);
+  sphere.pose.translation() = centre;
+  sphere.extent.minimum = Eigen::Vector3d::Constant(-1.0);
+  sphere.extent.maximum = Eigen::Vector3d::Constant(1.0);
+  return sphere;
+}
+
 Scene hand_made_scene() {
   Scene scene;
   scene.name = "hand_made";
@@ -50,15 +63,7 @@ Scene hand_made_scene() {
   wall.extent.minimum = Eigen::Vector3d(0, 0, 0);
   wall.extent.maximum = Eigen::Vector3d(0, 10, 5);
   add(wall);
-  ScenePrimitive ball;  // sphere radius 1 at (5, 0, 0)
-  ball.name = "ball";
-  ball.label = SemanticLabel::Ornament;
-  ball.surface_type = ball.model_type = QuadricType::Sphere;
-  ball.scale = Eigen::Vector3d::Constant(1.0);
-  ball.pose.translation() = Eigen::Vector3d(5, 0, 0);
-  ball.extent.minimum = Eigen::Vector3d::Constant(-1.0);
-  ball.extent.maximum = Eigen::Vector3d::Constant(1.0);
-  add(ball);
+  add(unit_sphere("ball", SemanticLabel::Ornament, Eigen::Vector3d(5, 0, 0)));
   ScenePrimitive post;  // vertical cylinder radius 0.5 at (5, 3), z in [-1, 1]
   post.name = "post";
   post.label = SemanticLabel::Pole;
@@ -225,14 +230,7 @@ TEST(RayCaster, HierarchyAgreesWithBruteForce) {
 TEST(RayCaster, PorousVolumeStopsRaysAtExponentialDepths) {
   Scene scene;
   scene.name = "porous";
-  ScenePrimitive crown;
-  crown.name = "crown";
-  crown.label = SemanticLabel::Vegetation;
-  crown.surface_type = crown.model_type = QuadricType::Sphere;
-  crown.scale = Eigen::Vector3d::Constant(1.0);
-  crown.pose.translation() = Eigen::Vector3d(10, 0, 0);
-  crown.extent.minimum = Eigen::Vector3d::Constant(-1.0);
-  crown.extent.maximum = Eigen::Vector3d::Constant(1.0);
+  ScenePrimitive crown = unit_sphere("crown", SemanticLabel::Vegetation, Eigen::Vector3d(10, 0, 0));
   crown.mean_free_path = 0.8;
   scene.primitives.push_back(crown);
   const RayCaster caster(scene);
