@@ -13,8 +13,10 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
+#include <limits>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <sstream>
 #include <optional>
 #include <unordered_set>
@@ -376,5 +378,93 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
   result.best_in_grid = lies_inside_grid(result.optima[result.best].transform, answer, axes, options);
   return result;
 }
+
+std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, const PointCloud& target,
+                                                    const std::optional<Eigen::Vector4d>& source_ground,
+                                                    const std::optional<Eigen::Vector4d>& target_ground,
+                                                    const Eigen::Matrix3d& rotation, const Eigen::Vector3d& around,
+                                                    const Eigen::Vector3d& up, double reach, std::size_t count) {
+  static constexpr double kCell = 1.0, kGroundClearance = 0.5, kSeparation = 3.0;
+  static constexpr double kCoarseStep = 2.0;
+  static constexpr std::size_t kSamples = 300, kRefined = 16;
+  static constexpr std::size_t kMaximumCells = std::size_t(1) << 31;  // 256 MB of bits: a scan hundreds of metres across
+  const auto above = [&](const std::optional<Eigen::Vector4d>& ground, const Eigen::Vector3d& point) {
+    return !ground || std::abs(ground->head<3>().dot(point) + (*ground)(3)) >= kGroundClearance;
+  };
+  std::vector<Eigen::Vector3d> target_points, samples;
+  for (Eigen::Index i = 0; i < target.positions.cols(); ++i) {
+    const Eigen::Vector3d point = target.positions.col(i).cast<double>();
+    if (above(target_ground, point)) target_points.push_back(point);
+  }
+  for (Eigen::Index i = 0; i < source.positions.cols(); ++i) {
+    const Eigen::Vector3d point = source.positions.col(i).cast<double>();
+    if (above(source_ground, point)) samples.push_back(rotation * point);
+  }
+  if (target_points.empty() || samples.empty() || count == 0) return {};
+  if (samples.size() > kSamples) {
+    std::vector<Eigen::Vector3d> strided;
+    const double stride = static_cast<double>(samples.size()) / kSamples;
+    for (std::size_t k = 0; k < kSamples; ++k) strided.push_back(samples[static_cast<std::size_t>(k * stride)]);
+    samples.swap(strided);
+  }
+  // The target's occupied cells as a dense bit grid over its box: a lookup is a few multiplications,
+  // where a hash set made the correlation four times slower (measured on KITTI pairs).
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& point : target_points) box.extend(point);
+  const Eigen::Vector3d low = box.min();
+  const Eigen::Array3i size = ((box.max() - low) / kCell).array().floor().cast<int>() + 1;
+  const std::size_t cells = static_cast<std::size_t>(size.x()) * static_cast<std::size_t>(size.y()) * static_cast<std::size_t>(size.z());
+  if (cells > kMaximumCells) return {};
+  std::vector<bool> occupied(cells, false);
+  const auto cell_index = [&](const Eigen::Vector3d& point) -> std::optional<std::size_t> {
+    const Eigen::Array3d cell = ((point - low) / kCell).array().floor();
+    if ((cell < 0.0).any() || (cell >= size.cast<double>()).any()) return std::nullopt;
+    return (static_cast<std::size_t>(cell.x()) * static_cast<std::size_t>(size.y()) + static_cast<std::size_t>(cell.y())) *
+               static_cast<std::size_t>(size.z()) + static_cast<std::size_t>(cell.z());
+  };
+  for (const Eigen::Vector3d& point : target_points) occupied[*cell_index(point)] = true;
+  const auto score_of = [&](const Eigen::Vector3d& translation) {
+    std::size_t hits = 0;
+    for (const Eigen::Vector3d& sample : samples) {
+      const std::optional<std::size_t> cell = cell_index(sample + translation);
+      hits += cell && occupied[*cell];
+    }
+    return static_cast<double>(hits);
+  };
+  const Eigen::Vector3d first = up.unitOrthogonal(), second = up.cross(first);
+  // Coarse to fine: every 2 m within reach, then every 1 m around the best coarse translations
+  // (one 1 m grid cost about 27 ms a KITTI pair, this about a tenth of it).
+  const int steps = static_cast<int>(std::floor(reach / kCoarseStep));
+  const int side = 2 * steps + 1;
+  std::vector<std::pair<double, Eigen::Vector3d>> coarse(static_cast<std::size_t>(side) * static_cast<std::size_t>(side));
+  tbb::parallel_for(0, side, [&](int row) {
+    for (int column = 0; column < side; ++column) {
+      const Eigen::Vector3d translation = around + (row - steps) * kCoarseStep * first + (column - steps) * kCoarseStep * second;
+      coarse[static_cast<std::size_t>(row) * static_cast<std::size_t>(side) + static_cast<std::size_t>(column)] = {
+          score_of(translation), translation};
+    }
+  });
+  const auto better = [](const auto& a, const auto& b) { return a.first > b.first; };
+  std::stable_sort(coarse.begin(), coarse.end(), better);
+  std::vector<std::pair<double, Eigen::Vector3d>> fine;
+  for (std::size_t k = 0; k < std::min(kRefined, coarse.size()); ++k)
+    for (int row = -1; row <= 1; ++row)
+      for (int column = -1; column <= 1; ++column) {
+        const Eigen::Vector3d translation = coarse[k].second + row * kCell * first + column * kCell * second;
+        fine.emplace_back(score_of(translation), translation);
+      }
+  std::stable_sort(fine.begin(), fine.end(), better);
+  std::vector<Eigen::Vector3d> chosen;
+  for (const auto& scored : fine) {
+    if (chosen.size() >= count || scored.first <= 0.0) break;
+    const Eigen::Vector3d& translation = scored.second;
+    const bool near_better = std::any_of(chosen.begin(), chosen.end(), [&](const Eigen::Vector3d& other) {
+      return (translation - other).norm() < kSeparation;
+    });
+    if (!near_better) chosen.push_back(translation);
+  }
+  return chosen;
+}
+
 
 }  // namespace quadrix

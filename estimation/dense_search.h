@@ -90,4 +90,20 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
                                            double translation_disagreement, double rotation_disagreement_degrees,
                                            const DenseSearchOptions& options = {});
 
+/// Translations that land the most source points in space the target occupies under `rotation`,
+/// best first (at most `count`, at least 3 m apart): the count of up to 300 source points (an even
+/// stride) whose rotated and translated position falls in a 1 m cell holding target points, over
+/// translations every 2 m within `reach` of `around` along the ground (orthogonal to `up`), then
+/// every 1 m around the 16 best; the height stays `around`'s. Points within 0.5 m of their cloud's
+/// ground plane (n . x + offset = 0, given as (n, offset)) are left out, since a shared ground is
+/// occupied under any slide along it. check_half_turn starts ICP from these: the quadric votes reach
+/// only translations that same-class quadrics agree on, this reaches a street's mirror image
+/// anywhere along the street. Empty when either cloud has no point above its ground, `count` is 0,
+/// or the target's box exceeds 2^31 cells of 1 m.
+std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, const PointCloud& target,
+                                                    const std::optional<Eigen::Vector4d>& source_ground,
+                                                    const std::optional<Eigen::Vector4d>& target_ground,
+                                                    const Eigen::Matrix3d& rotation, const Eigen::Vector3d& around,
+                                                    const Eigen::Vector3d& up, double reach, std::size_t count);
+
 }  // namespace quadrix

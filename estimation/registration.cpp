@@ -596,6 +596,18 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
       start.translation() = translation;
       other_starts.push_back(start);
     }
+    std::optional<Eigen::Vector4d> target_ground;
+    if (result.target_model.has_ground) {
+      const Eigen::Vector3d& normal = result.target_model.ground_normal;
+      target_ground = Eigen::Vector4d(normal.x(), normal.y(), normal.z(), result.target_model.ground_offset);
+    }
+    for (const Eigen::Vector3d& translation :
+         correlate_translations(source, target, source_ground, target_ground, turned.linear(), turned.translation(), up,
+                                ambiguity.half_turn_correlation_reach, ambiguity.half_turn_correlation_starts)) {
+      Eigen::Isometry3d start = turned;
+      start.translation() = translation;
+      other_starts.push_back(start);
+    }
     // No grid: the search's single "answer" start is the turned answer (range 0 either way).
     DenseSearchOptions grid = options.dense_search;
     grid.range = grid.across_range = 0.0;

@@ -72,6 +72,8 @@ struct AmbiguityOptions {
   bool adopt_icp_optimum = true;              ///< an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it
   std::size_t half_turn_samples = 1500;       ///< source points the half-turn check's ICP aligns (dense_search.source_samples, 3,000, is for settling): half as many cut the check from about 100 to 80 ms a KITTI pair and changed no status on the loop-closure sets or pairs.tsv (docs/registration.md)
   std::size_t half_turn_votes = 8;            ///< ICP also starts from the half-turned rotation at this many translations the quadrics vote for (the axis of the turn is not known)
+  std::size_t half_turn_correlation_starts = 3;  ///< ICP also starts from the half-turned rotation at this many translations that land the most source points in space the target occupies (correlate_translations; 0: none)
+  double half_turn_correlation_reach = 40.0;     ///< those translations are searched this far, m, along the ground from the turned answer's: a street's mirror image can lie anywhere along it
 };
 
 /// Every option of register_clouds; defaults are the paper's (§"Implementation Details").
@@ -236,7 +238,9 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 /// rotation is turned by 180 degrees about the up axis (the target's ground normal); point-to-plane
 /// ICP then runs from that rotation turned about the centre of the source points the answer lands
 /// on the target, from the same rotation at the `half_turn_votes` translations most same-class
-/// quadric pairs vote for (the axis of the turn is not known), and from the answer itself. An `ok`
+/// quadric pairs vote for (the axis of the turn is not known), at the
+/// `half_turn_correlation_starts` translations within `half_turn_correlation_reach` that land the
+/// most source points in space the target occupies, and from the answer itself. An `ok`
 /// answer whose own optimum beats the best disagreeing optimum by less than
 /// `options.ambiguity.half_turn_margin` is demoted to `ambiguous` (findings.half_turn_rival); one
 /// that passes becomes its ICP optimum when `adopt_icp_optimum`. When `may_replace`, an `ok` or

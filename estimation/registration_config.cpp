@@ -152,6 +152,8 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::adopt_icp_optimum>("ambiguity.adopt_icp_optimum", "an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_samples>("ambiguity.half_turn_samples", "source points the half-turn check's ICP aligns, points (>= 6)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_votes>("ambiguity.half_turn_votes", "ICP also starts from the turned rotation at this many translations the quadrics vote for, starts"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_correlation_starts>("ambiguity.half_turn_correlation_starts", "ICP also starts from the turned rotation at this many translations that land the most source points in occupied target space, starts"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_correlation_reach>("ambiguity.half_turn_correlation_reach", "how far along the ground those translations are searched from the turned answer's, m"),
       // dense_search
       shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),
       shared_key<&R::dense_search, &DenseSearchOptions::voxel_size>("dense_search.voxel_size", "both clouds thinned to one point per cube of this edge, m (> 0)"),
