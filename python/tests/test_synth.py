@@ -47,3 +47,18 @@ def test_names_are_listed_and_checked():
         quadrix.synth("highway")
     with pytest.raises(ValueError, match="hdl32"):
         quadrix.synth("street", sensor="hdl32")
+
+
+def test_porous_foliage_matches_the_cli_and_adds_vegetation(tmp_path, quadrix_cli):
+    leafy = quadrix.synth("street", seed=11, sensor="hdl64", foliage="porous", out=tmp_path / "py")
+    quadrix_cli("synth", "street", "--seed", 11, "--sensor", "hdl64", "--foliage", "porous", "--out", tmp_path / "cli")
+    for name in leafy["files"]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    solid = quadrix.synth("street", seed=11, sensor="hdl64", primitives=False)
+    vegetation = 70  # SemanticKITTI id, as the simulator labels crowns and hedges
+    assert np.sum(leafy["clouds"][0].labels == vegetation) > 5 * np.sum(solid["clouds"][0].labels == vegetation)
+    assert any(p["name"].startswith("hedge_") and p["mean_free_path"] > 0 for p in leafy["primitives"])
+    with pytest.raises(ValueError, match="porous"):
+        quadrix.synth("corridor", foliage="porous")
+    with pytest.raises(ValueError, match="solid or porous"):
+        quadrix.synth("street", foliage="leafy")
