@@ -57,7 +57,7 @@ def test_porous_foliage_matches_the_cli_and_adds_vegetation(tmp_path, quadrix_cl
     solid = quadrix.synth("street", seed=11, sensor="hdl64", primitives=False)
     vegetation = 70  # SemanticKITTI id, as the simulator labels crowns and hedges
     assert np.sum(leafy["clouds"][0].labels == vegetation) > 5 * np.sum(solid["clouds"][0].labels == vegetation)
-    assert any(p["name"].startswith("hedge_") and p["mean_free_path"] > 0 for p in leafy["primitives"])
+    assert any(p["name"].startswith("hedge_") and p["mean_free_path"] > 0 for p in leafy["primitives"]["primitives"])
     with pytest.raises(ValueError, match="porous"):
         quadrix.synth("corridor", foliage="porous")
     with pytest.raises(ValueError, match="solid or porous"):
