@@ -13,7 +13,6 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
-#include <limits>
 #include <memory>
 #include <mutex>
 #include <numeric>
@@ -391,22 +390,22 @@ std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, co
   const auto above = [&](const std::optional<Eigen::Vector4d>& ground, const Eigen::Vector3d& point) {
     return !ground || std::abs(ground->head<3>().dot(point) + (*ground)(3)) >= kGroundClearance;
   };
-  std::vector<Eigen::Vector3d> target_points, samples;
-  for (Eigen::Index i = 0; i < target.positions.cols(); ++i) {
-    const Eigen::Vector3d point = target.positions.col(i).cast<double>();
-    if (above(target_ground, point)) target_points.push_back(point);
-  }
-  for (Eigen::Index i = 0; i < source.positions.cols(); ++i) {
-    const Eigen::Vector3d point = source.positions.col(i).cast<double>();
-    if (above(source_ground, point)) samples.push_back(rotation * point);
-  }
-  if (target_points.empty() || samples.empty() || count == 0) return {};
-  if (samples.size() > kSamples) {
-    std::vector<Eigen::Vector3d> strided;
-    const double stride = static_cast<double>(samples.size()) / kSamples;
-    for (std::size_t k = 0; k < kSamples; ++k) strided.push_back(samples[static_cast<std::size_t>(k * stride)]);
-    samples.swap(strided);
-  }
+  const auto points_above = [&](const PointCloud& cloud, const std::optional<Eigen::Vector4d>& ground) {
+    std::vector<Eigen::Vector3d> kept;
+    for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i) {
+      const Eigen::Vector3d point = cloud.positions.col(i).cast<double>();
+      if (above(ground, point)) kept.push_back(point);
+    }
+    return kept;
+  };
+  const std::vector<Eigen::Vector3d> target_points = points_above(target, target_ground);
+  const std::vector<Eigen::Vector3d> source_points = points_above(source, source_ground);
+  if (target_points.empty() || source_points.empty() || count == 0) return {};
+  // An even stride of the source points, rotated.
+  std::vector<Eigen::Vector3d> samples;
+  const std::size_t sample_count = std::min(kSamples, source_points.size());
+  const double stride = static_cast<double>(source_points.size()) / static_cast<double>(sample_count);
+  for (std::size_t k = 0; k < sample_count; ++k) samples.push_back(rotation * source_points[static_cast<std::size_t>(k * stride)]);
   // The target's occupied cells as a dense bit grid over its box: a lookup is a few multiplications,
   // where a hash set made the correlation four times slower (measured on KITTI pairs).
   Eigen::AlignedBox3d box;
@@ -429,14 +428,14 @@ std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, co
       const std::optional<std::size_t> cell = cell_index(sample + translation);
       hits += cell && occupied[*cell];
     }
-    return static_cast<double>(hits);
+    return hits;
   };
   const Eigen::Vector3d first = up.unitOrthogonal(), second = up.cross(first);
   // Coarse to fine: every 2 m within reach, then every 1 m around the best coarse translations
   // (one 1 m grid cost about 27 ms a KITTI pair, this about a tenth of it).
   const int steps = static_cast<int>(std::floor(reach / kCoarseStep));
   const int side = 2 * steps + 1;
-  std::vector<std::pair<double, Eigen::Vector3d>> coarse(static_cast<std::size_t>(side) * static_cast<std::size_t>(side));
+  std::vector<std::pair<std::size_t, Eigen::Vector3d>> coarse(static_cast<std::size_t>(side) * static_cast<std::size_t>(side));
   tbb::parallel_for(0, side, [&](int row) {
     for (int column = 0; column < side; ++column) {
       const Eigen::Vector3d translation = around + (row - steps) * kCoarseStep * first + (column - steps) * kCoarseStep * second;
@@ -446,7 +445,7 @@ std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, co
   });
   const auto better = [](const auto& a, const auto& b) { return a.first > b.first; };
   std::stable_sort(coarse.begin(), coarse.end(), better);
-  std::vector<std::pair<double, Eigen::Vector3d>> fine;
+  std::vector<std::pair<std::size_t, Eigen::Vector3d>> fine;
   for (std::size_t k = 0; k < std::min(kRefined, coarse.size()); ++k)
     for (int row = -1; row <= 1; ++row)
       for (int column = -1; column <= 1; ++column) {
@@ -456,7 +455,7 @@ std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, co
   std::stable_sort(fine.begin(), fine.end(), better);
   std::vector<Eigen::Vector3d> chosen;
   for (const auto& scored : fine) {
-    if (chosen.size() >= count || scored.first <= 0.0) break;
+    if (chosen.size() >= count || scored.first == 0) break;
     const Eigen::Vector3d& translation = scored.second;
     const bool near_better = std::any_of(chosen.begin(), chosen.end(), [&](const Eigen::Vector3d& other) {
       return (translation - other).norm() < kSeparation;
@@ -465,6 +464,5 @@ std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, co
   }
   return chosen;
 }
-
 
 }  // namespace quadrix

@@ -384,11 +384,10 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
 
 namespace {
 
-// The source model's ground plane (n, d) as the overlap measure takes it, when the model has one.
-std::optional<Eigen::Vector4d> source_ground_of(const RegistrationResult& result) {
-  if (!result.source_model.has_ground) return std::nullopt;
-  const Eigen::Vector3d& normal = result.source_model.ground_normal;
-  return Eigen::Vector4d(normal.x(), normal.y(), normal.z(), result.source_model.ground_offset);
+// A model's ground plane (n, d) as the overlap measure takes it, when the model has one.
+std::optional<Eigen::Vector4d> ground_of(const SceneModel& model) {
+  if (!model.has_ground) return std::nullopt;
+  return Eigen::Vector4d(model.ground_normal.x(), model.ground_normal.y(), model.ground_normal.z(), model.ground_offset);
 }
 
 }  // namespace
@@ -396,7 +395,7 @@ std::optional<Eigen::Vector4d> source_ground_of(const RegistrationResult& result
 void check_overlap(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                    const AmbiguityOptions& options) {
   timed(result, "overlap", [&] {
-    const OverlapMeasure overlap = measure_overlap(source, target, result.transform, source_ground_of(result));
+    const OverlapMeasure overlap = measure_overlap(source, target, result.transform, ground_of(result.source_model));
     result.overlap = overlap;
     const bool was_ok = result.status == RegistrationStatus::Ok;
     result.findings.fits_worse_than_identity =
@@ -550,7 +549,7 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
   std::optional<Eigen::Vector3d> up;
   if (result.target_model.has_ground) up = result.target_model.ground_normal;
   const DenseSearchResult search = search_weakest_direction(
-      source, target, result.transform, other_starts, up, source_ground_of(result),
+      source, target, result.transform, other_starts, up, ground_of(result.source_model),
       options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
   const bool settled = dense_search_settles(search, options.dense_search);
   result.message += describe_dense_search(search, result, settled, options.dense_search);
@@ -573,7 +572,7 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
       ambiguity.half_turn_margin < 0.0 || source.empty() || target.empty())
     return;
   timed(result, "half_turn", [&] {
-    const std::optional<Eigen::Vector4d> source_ground = source_ground_of(result);
+    const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model);
     // The pivot: the centre of what the answer lands on the target, as check_overlap measured it for
     // this answer (measured here when it has not run).
     const std::optional<Eigen::Vector3d> pivot =
@@ -596,13 +595,9 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
       start.translation() = translation;
       other_starts.push_back(start);
     }
-    std::optional<Eigen::Vector4d> target_ground;
-    if (result.target_model.has_ground) {
-      const Eigen::Vector3d& normal = result.target_model.ground_normal;
-      target_ground = Eigen::Vector4d(normal.x(), normal.y(), normal.z(), result.target_model.ground_offset);
-    }
     for (const Eigen::Vector3d& translation :
-         correlate_translations(source, target, source_ground, target_ground, turned.linear(), turned.translation(), up,
+         correlate_translations(source, target, source_ground, ground_of(result.target_model), turned.linear(),
+                                turned.translation(), up,
                                 ambiguity.half_turn_correlation_reach, ambiguity.half_turn_correlation_starts)) {
       Eigen::Isometry3d start = turned;
       start.translation() = translation;

@@ -199,7 +199,6 @@ struct RunContext {
   }
 };
 
-
 // `unmoved_source` is the source before any perturbation (damaged when a corruption is set): the
 // options are resolved on it, as `quadrix register` would resolve them on the file it is given.
 BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input, const PointCloud& unmoved_source,
@@ -241,10 +240,10 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   BuiltModel source_model, target_model;
   tbb::parallel_invoke([&] { build(*input.source, source_extraction, registration.modelling, source_model); },
                        [&] { build(*input.target, registration.target_extraction, registration.modelling, target_model); });
-  // The same pipeline as register_clouds from here on. A perturbed source's
-  // sensor sits at the perturbation's origin: its range crop in the verification follows it.
+  // The same pipeline as register_clouds from here on. A perturbed source's sensor sits at the
+  // perturbation's origin: its range crop in the verification follows it.
   RegistrationOptions pipeline = registration;
-  if (perturbed) pipeline.source_extraction.sensor_origin = input.perturbation * registration.source_extraction.sensor_origin;
+  pipeline.source_extraction.sensor_origin = source_extraction.sensor_origin;
   const std::string& ablation = context.options->ablation;
   const RegistrationResult result = register_modelled_clouds(
       {input.source, &source_model.modelling, source_model.modelling_ms, true},
