@@ -222,11 +222,14 @@ WeakestAxes find_weakest_axes(const Linearisation& at_answer, const std::optiona
 struct NamedStarts {
   std::vector<Eigen::Isometry3d> transforms;
   std::vector<std::string> names;
+  std::size_t first_global = 0;  // the global starts are [first_global, first_global + global_count)
+  std::size_t global_count = 0;
 };
 
 // Lays out the starts: a grid around the answer, then every other candidate, then the identity.
 NamedStarts lay_out_starts(const Eigen::Isometry3d& answer, const std::vector<Eigen::Isometry3d>& other_starts,
-                           const WeakestAxes& axes, const DenseSearchOptions& options) {
+                           const std::vector<Eigen::Isometry3d>& global_starts, const WeakestAxes& axes,
+                           const DenseSearchOptions& options) {
   NamedStarts starts;
   // A grid of starts: fine along the weakest direction, where the quadrics are least sure, and
   // coarse across it (along the ground), so an answer that is also off sideways is still reached.
@@ -243,6 +246,12 @@ NamedStarts lay_out_starts(const Eigen::Isometry3d& answer, const std::vector<Ei
   for (std::size_t i = 0; i < other_starts.size(); ++i) {
     starts.transforms.push_back(other_starts[i]);
     starts.names.push_back("candidate " + std::to_string(i));
+  }
+  starts.first_global = starts.transforms.size();
+  starts.global_count = global_starts.size();
+  for (std::size_t i = 0; i < global_starts.size(); ++i) {
+    starts.transforms.push_back(global_starts[i]);
+    starts.names.push_back("correlation " + std::to_string(i));
   }
   starts.transforms.push_back(Eigen::Isometry3d::Identity());
   starts.names.push_back("identity");
@@ -339,6 +348,7 @@ void validate_dense_search_options(const DenseSearchOptions& options) {
   if (!(options.minimum_overlap >= 0.0 && options.minimum_overlap <= 1.0)) fail("minimum_overlap", "in [0, 1]", options.minimum_overlap);
   if (options.normal_neighbours < 3) fail("normal_neighbours", "at least 3", static_cast<double>(options.normal_neighbours));
   if (options.source_samples < 6) fail("source_samples", "at least 6", static_cast<double>(options.source_samples));
+  validate_ground_correlation_options(options.correlation);
 }
 
 DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& start,
@@ -353,6 +363,7 @@ DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& ta
 
 DenseSearchResult search_weakest_direction(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& answer,
                                            const std::vector<Eigen::Isometry3d>& other_starts,
+                                           const std::vector<Eigen::Isometry3d>& global_starts,
                                            const std::optional<Eigen::Vector3d>& up,
                                            const std::optional<Eigen::Vector4d>& source_ground,
                                            double translation_disagreement, double rotation_disagreement_degrees,
@@ -365,7 +376,7 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
   const WeakestAxes axes = find_weakest_axes(linearise(pair, pair.source, answer, options.correspondence_distance), up);
   result.weakest_direction = axes.weakest;
   result.weakest_share = axes.share;
-  const NamedStarts starts = lay_out_starts(answer, other_starts, axes, options);
+  const NamedStarts starts = lay_out_starts(answer, other_starts, global_starts, axes, options);
   // Two passes. Every start first gets half the iterations on a third of the samples. Only the
   // optima whose coarse overlap is within `refine_band` of the best are then refined on all samples
   // and scored again. The others are too far below to win or to decide the margin, so they keep
@@ -374,7 +385,10 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
   result.optima = run_coarse_pass(pair, starts, source_ground, options);
   refine_contenders(pair, choose_contenders(result, options), source_ground, options, result.optima);
   pick_best_and_rival(result, translation_disagreement, rotation_disagreement_degrees);
-  result.best_in_grid = lies_inside_grid(result.optima[result.best].transform, answer, axes, options);
+  // An optimum reached from a global start was found by a search over every yaw and translation
+  // within its reach, so no better optimum hides just beyond the grid's edge for it.
+  const bool from_global_start = result.best >= starts.first_global && result.best < starts.first_global + starts.global_count;
+  result.best_in_grid = from_global_start || lies_inside_grid(result.optima[result.best].transform, answer, axes, options);
   return result;
 }
 

@@ -8,6 +8,7 @@
 // every distinct optimum by a clear margin and lands enough of the source on the target.
 #pragma once
 
+#include "estimation/ground_correlation.h"
 #include "estimation/overlap.h"
 #include "geometry/point_cloud.h"
 
@@ -37,12 +38,14 @@ struct DenseSearchOptions {
   std::size_t max_refined = 12;          ///< at most this many (the best first); more in the band leaves the search unsettled
   double minimum_overlap = 0.4;          ///< and put at least this fraction of the source on the target (wrong settles measured 0.23-0.33, right ones 0.44-0.79)
   double decisive_margin = 0.03;         ///< the winner's overlap must beat every distinct optimum's by this to be `ok` (about 2.5 standard errors of a difference of two fractions over the same 3,000 samples)
+  GroundCorrelationOptions correlation;  ///< register_clouds also starts ICP from the poses of the correlation over yaw and ground translation (correlation.poses 0: none)
 };
 
 /// Throws quadrix::Error naming the first option out of range (e.g. "option 'dense_search.voxel_size'
 /// must be positive, got 0"): voxel_size, correspondence_distance, step and across_step positive,
 /// range, across_range, refine_band and decisive_margin not negative, minimum_overlap in [0, 1],
-/// max_refined at least 1, normal_neighbours at least 3, source_samples at least 6.
+/// max_refined at least 1, normal_neighbours at least 3, source_samples at least 6; then the
+/// correlation's options (validate_ground_correlation_options).
 void validate_dense_search_options(const DenseSearchOptions& options);
 
 /// Where one ICP run started and where it ended.
@@ -62,7 +65,7 @@ struct DenseSearchResult {
   std::size_t best = 0;                                          ///< index of the highest overlap in `optima`
   std::optional<std::size_t> rival;                              ///< the highest-overlap optimum that disagrees with the best, if any
   double margin = 0.0;                                           ///< best overlap minus the rival's (the best overlap when there is no rival)
-  bool best_in_grid = false;                                     ///< the best lies inside the grid of starts (within range - step along, across_range across); else the search cannot settle
+  bool best_in_grid = false;                                     ///< the best lies inside the grid of starts (within range - step along, across_range across) or was reached from a global start; else the search cannot settle
   std::size_t unrefined_contenders = 0;                          ///< optima within refine_band of the best left unrefined (beyond max_refined): the search cannot settle
   std::size_t source_points = 0;                                 ///< thinned source points ICP aligned
   std::size_t target_points = 0;                                 ///< thinned target points with a normal
@@ -79,12 +82,14 @@ DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& ta
 /// Runs ICP from `answer` shifted by k·step (|k·step| ≤ range) along the weakest translation
 /// direction of the target's normals at `answer` (orthogonal to `up` when given: motions along the
 /// ground) and by j·across_step (|j·across_step| ≤ across_range) across it, from each of
-/// `other_starts`, and from the identity; scores every optimum by
+/// `other_starts`, from each of `global_starts` (poses of a search over the whole scene, such as
+/// correlate_over_ground's, named "correlation k"), and from the identity; scores every optimum by
 /// measure_overlap (points near `source_ground` skipped) and names the best and its best distinct
 /// rival (farther than `translation_disagreement` m or `rotation_disagreement_degrees` apart).
 /// Throws quadrix::Error for options out of range (validate_dense_search_options).
 DenseSearchResult search_weakest_direction(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& answer,
                                            const std::vector<Eigen::Isometry3d>& other_starts,
+                                           const std::vector<Eigen::Isometry3d>& global_starts,
                                            const std::optional<Eigen::Vector3d>& up,
                                            const std::optional<Eigen::Vector4d>& source_ground,
                                            double translation_disagreement, double rotation_disagreement_degrees,

@@ -540,7 +540,7 @@ Eigen::Vector3d target_up(const RegistrationResult& result, const RegistrationOp
 
 // Settles an `ambiguous` answer with the dense search along the weakest direction (search_weakest_direction).
 void settle_with_dense_search(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                              const RegistrationOptions& options) {
+                              const std::vector<Eigen::Isometry3d>& global_starts, const RegistrationOptions& options) {
   std::vector<Eigen::Isometry3d> other_starts;
   for (std::size_t i = 0; i < result.candidates.size(); ++i)
     if (result.candidates[i].valid && i != result.best_candidate) other_starts.push_back(result.candidates[i].transform);
@@ -549,7 +549,7 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
   std::optional<Eigen::Vector3d> up;
   if (result.target_model.has_ground) up = result.target_model.ground_normal;
   const DenseSearchResult search = search_weakest_direction(
-      source, target, result.transform, other_starts, up, ground_of(result.source_model),
+      source, target, result.transform, other_starts, global_starts, up, ground_of(result.source_model),
       options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
   const bool settled = dense_search_settles(search, options.dense_search);
   result.message += describe_dense_search(search, result, settled, options.dense_search);
@@ -608,7 +608,7 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
     grid.range = grid.across_range = 0.0;
     grid.source_samples = ambiguity.half_turn_samples;
     const DenseSearchResult search =
-        search_weakest_direction(source, target, turned, other_starts, up, source_ground,
+        search_weakest_direction(source, target, turned, other_starts, {}, up, source_ground,
                                  ambiguity.translation_disagreement, ambiguity.rotation_disagreement_degrees, grid);
     // The answer's own optimum is the first start after the grid ("candidate 0"; the identity is
     // last); the rival is the best optimum anywhere that disagrees with it.
@@ -675,7 +675,22 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
   if (result.status != RegistrationStatus::Ambiguous || !options.dense_search.enabled || cropped_source.empty() ||
       cropped_target.empty())
     return;
-  timed(result, "dense_search", [&] { settle_with_dense_search(result, cropped_source, cropped_target, options); });
+  // The dense search also starts from the poses of the correlation over yaw and ground translation,
+  // which reach answers no quadric candidate is near (hard pairs whose cliques hold no true inlier).
+  std::vector<Eigen::Isometry3d> global_starts;
+  const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
+  if (options.dense_search.correlation.poses > 0 && source_ground && target_ground)
+    timed(result, "ground_correlation", [&] {
+      const std::vector<GroundPose> poses =
+          correlate_over_ground(cropped_source, cropped_target, *source_ground, *target_ground, options.dense_search.correlation);
+      for (const GroundPose& pose : poses) global_starts.push_back(pose.transform);
+      std::ostringstream why;
+      why.precision(3);
+      why << "; correlation over the ground: " << poses.size() << " poses";
+      if (!poses.empty()) why << ", best lands " << poses.front().share << " of the source cells at yaw " << poses.front().yaw_degrees << " deg";
+      result.message += why.str();
+    });
+  timed(result, "dense_search", [&] { settle_with_dense_search(result, cropped_source, cropped_target, global_starts, options); });
   // The new answer, under the same guards.
   if (result.findings.settled_by_dense_search) {
     check_overlap(result, cropped_source, cropped_target, options.ambiguity);

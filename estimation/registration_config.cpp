@@ -71,6 +71,7 @@ RegistrationConfigKey extraction_key(const char* path, const char* description,
 constexpr const char* kSensorKey = "sensor";  // restarts the extraction from that preset before the other keys
 
 std::vector<RegistrationConfigKey> make_registration_config_keys() {
+  using G = GroundCorrelationOptions;
   using E = ExtractionOptions;
   using R = RegistrationOptions;
   return {
@@ -169,6 +170,15 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::dense_search, &DenseSearchOptions::max_refined>("dense_search.max_refined", "at most this many optima refined, optima (>= 1)"),
       shared_key<&R::dense_search, &DenseSearchOptions::minimum_overlap>("dense_search.minimum_overlap", "a settled answer puts at least this fraction of the source on the target, fraction (0..1)"),
       shared_key<&R::dense_search, &DenseSearchOptions::decisive_margin>("dense_search.decisive_margin", "the winner's overlap beats every distinct optimum's by this, fraction (>= 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::poses>("dense_search.correlation.poses", "ICP also starts from this many poses of the correlation over yaw and ground translation, poses (0: none)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::reach>("dense_search.correlation.reach", "translations searched within this of not moving, along the ground, m (> 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::yaw_step_degrees>("dense_search.correlation.yaw_step_degrees", "spacing of the yaws searched over a full turn, degrees (0..180]"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::coarse_cell>("dense_search.correlation.coarse_cell", "cell edge of the first pass over every yaw and translation, m (> 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::fine_cell>("dense_search.correlation.fine_cell", "cell edge of the second pass around the best coarse poses, m (> 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::minimum_height>("dense_search.correlation.minimum_height", "points lower than this above their ground are left out, m"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::maximum_height>("dense_search.correlation.maximum_height", "points higher than this above their ground are left out, m (> minimum_height)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::separation>("dense_search.correlation.separation", "poses closer than this in translation to a better one (and within separation_degrees) are not reported, m (>= 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::separation_degrees>("dense_search.correlation.separation_degrees", "poses closer than this in yaw to a better one (and within separation) are not reported, degrees (>= 0)"),
   };
 }
 

@@ -58,7 +58,7 @@ BENCHMARK(BM_AlignPointToPlane3dtk)->Unit(benchmark::kMillisecond)->UseRealTime(
 void BM_SearchWeakestDirection3dtk(benchmark::State& state) {
   if (!require_pair(state)) return;
   for (auto _ : state)
-    benchmark::DoNotOptimize(quadrix::search_weakest_direction(pair_2_to_0().source, pair_2_to_0().target, Eigen::Isometry3d::Identity(), {},
+    benchmark::DoNotOptimize(quadrix::search_weakest_direction(pair_2_to_0().source, pair_2_to_0().target, Eigen::Isometry3d::Identity(), {}, {},
                                                                Eigen::Vector3d::UnitZ(), std::nullopt, 2.0, 5.0)
                                  .margin);
 }

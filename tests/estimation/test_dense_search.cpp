@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -122,6 +123,22 @@ ScannedPair scan_pair(const Scene& scene, const Eigen::Isometry3d& source_sensor
   return pair;
 }
 
+// A 100 x 30 m lot (ground at z = 0) with 30 boxes of random footprint (0.3-3 m a side) and
+// height (0.8-4 m) at random places, each seen by its four walls.
+Scene lot_of_boxes(std::mt19937& rng) {
+  Scene lot;
+  lot.add({-50, -15, 0}, {100, 0, 0}, {0, 30, 0});
+  std::uniform_real_distribution<double> along(-48.0, 48.0), across(-14.0, 14.0), size(0.3, 3.0), height(0.8, 4.0);
+  for (int object = 0; object < 30; ++object) {
+    const double x = along(rng), y = across(rng), w = size(rng), d = size(rng), h = height(rng);
+    lot.add({x, y, 0}, {w, 0, 0}, {0, 0, h});
+    lot.add({x, y + d, 0}, {w, 0, 0}, {0, 0, h});
+    lot.add({x, y, 0}, {0, d, 0}, {0, 0, h});
+    lot.add({x + w, y, 0}, {0, d, 0}, {0, 0, h});
+  }
+  return lot;
+}
+
 TEST(DenseSearch, PointToPlaneIcpRecoversASmallOffset) {
   std::mt19937 rng(3);
   const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(1.0, 0.5, 4.0), 20.0, 40000, rng);
@@ -211,16 +228,7 @@ TEST(DenseSearch, OccupancyCorrelationFindsTheTranslationOfTheObjects) {
   const int layouts = 10;
   for (int layout = 0; layout < layouts; ++layout) {
     std::mt19937 rng(100 + layout);
-    Scene lot;
-    lot.add({-50, -15, 0}, {100, 0, 0}, {0, 30, 0});
-    std::uniform_real_distribution<double> along(-48.0, 48.0), across(-14.0, 14.0), size(0.3, 3.0), height(0.8, 4.0);
-    for (int object = 0; object < 30; ++object) {
-      const double x = along(rng), y = across(rng), w = size(rng), d = size(rng), h = height(rng);
-      lot.add({x, y, 0}, {w, 0, 0}, {0, 0, h});
-      lot.add({x, y + d, 0}, {w, 0, 0}, {0, 0, h});
-      lot.add({x, y, 0}, {0, d, 0}, {0, 0, h});
-      lot.add({x + w, y, 0}, {0, d, 0}, {0, 0, h});
-    }
+    const Scene lot = lot_of_boxes(rng);
     const ScannedPair pair = scan_pair(lot, pose(25, 1, 180), 200.0, 40000, rng);
     const auto finds_truth = [&](const Eigen::Matrix3d& rotation) {
       const std::vector<Eigen::Vector3d> best = correlate_translations(
@@ -242,6 +250,59 @@ TEST(DenseSearch, OccupancyCorrelationFindsTheTranslationOfTheObjects) {
   EXPECT_TRUE(correlate_translations(flat, flat, ground, ground, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(),
                                      Eigen::Vector3d::UnitZ(), 10.0, 3)
                   .empty());
+}
+
+// The correlation over yaw and ground translation (correlate_over_ground) on random lots of boxes:
+// the source sensor anywhere 10-30 m from the target's, at any yaw, tilted up to 10 degrees (its
+// own ground plane levels it). Its best pose must be the truth within 1 m and 2 degrees in every
+// layout, and put the source's ground on the target's.
+TEST(DenseSearch, CorrelationOverTheGroundFindsYawAndTranslation) {
+  const int layouts = 10;
+  int found = 0;
+  for (int layout = 0; layout < layouts; ++layout) {
+    std::mt19937 rng(300 + layout);
+    const Scene lot = lot_of_boxes(rng);
+    std::uniform_real_distribution<double> distance(10.0, 30.0), angle(-kPi, kPi), tilt(-10.0, 10.0);
+    const double heading = angle(rng), away = distance(rng);
+    Eigen::Isometry3d source_sensor = pose(away * std::cos(heading), 0.4 * away * std::sin(heading), angle(rng) * 180.0 / kPi);
+    source_sensor.rotate(Eigen::AngleAxisd(tilt(rng) * kPi / 180.0, Eigen::Vector3d::UnitX()));
+    source_sensor.rotate(Eigen::AngleAxisd(tilt(rng) * kPi / 180.0, Eigen::Vector3d::UnitY()));
+    const ScannedPair pair = scan_pair(lot, source_sensor, 200.0, 40000, rng);
+    // Ground z = 0 in the world: n = R^T e_z and d = t_z in the source sensor's frame.
+    const Eigen::Vector3d source_normal = source_sensor.linear().transpose() * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector4d source_ground(source_normal.x(), source_normal.y(), source_normal.z(), source_sensor.translation().z());
+    const std::vector<GroundPose> poses = correlate_over_ground(pair.source, pair.target, source_ground, Eigen::Vector4d(0, 0, 1, 1));
+    ASSERT_FALSE(poses.empty());
+    EXPECT_LE(poses.size(), GroundCorrelationOptions{}.poses);
+    const GroundPose& best = poses.front();
+    const double translation_off = translation_error(best.transform, pair.truth);
+    const double rotation_off = rotation_error_degrees(best.transform, pair.truth);
+    std::printf("layout %d: %.1f m away, best share %.3f, %.2f m and %.2f deg off\n", layout, away, best.share, translation_off,
+                rotation_off);
+    found += translation_off < 1.0 && rotation_off < 2.0;
+    for (std::size_t k = 1; k < poses.size(); ++k) EXPECT_LE(poses[k].share, poses[k - 1].share) << "best first";
+    // The source's ground lands on the target's (z = -1 in the level target sensor's frame).
+    const Eigen::Vector3d on_source_ground = source_sensor.inverse() * Eigen::Vector3d(3.0, -2.0, 0.0);
+    EXPECT_NEAR((best.transform * on_source_ground).z(), -1.0, 1e-6);
+  }
+  EXPECT_EQ(found, layouts);
+  // Nothing in the height band: no pose to offer.
+  PointCloud flat;
+  flat.positions = Eigen::Matrix3Xf::Zero(3, 10);
+  flat.positions.row(2).setConstant(-1.0f);
+  EXPECT_TRUE(correlate_over_ground(flat, flat, Eigen::Vector4d(0, 0, 1, 1), Eigen::Vector4d(0, 0, 1, 1)).empty());
+  // Options out of range are named.
+  GroundCorrelationOptions options;
+  options.maximum_height = options.minimum_height;
+  try {
+    correlate_over_ground(flat, flat, Eigen::Vector4d(0, 0, 1, 1), Eigen::Vector4d(0, 0, 1, 1), options);
+    ADD_FAILURE() << "a band of no height was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("'dense_search.correlation.maximum_height'"), std::string::npos) << error.what();
+  }
+  DenseSearchOptions dense;
+  dense.correlation.yaw_step_degrees = 0.0;
+  EXPECT_THROW(validate_dense_search_options(dense), Error);
 }
 
 TEST(DenseSearch, OptionsOutOfRangeAreNamed) {
