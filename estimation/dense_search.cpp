@@ -271,20 +271,41 @@ std::vector<DenseOptimum> run_coarse_pass(const PreparedPair& pair, const NamedS
   return optima;
 }
 
-// Chooses the optima to refine: within refine_band of the best coarse overlap, best first, at most max_refined.
-std::vector<std::size_t> choose_contenders(DenseSearchResult& result, const DenseSearchOptions& options) {
+// Whether two coarse optima are one local optimum reached from two starts (ICP from nearby starts
+// converges to within millimetres; distinct optima lie metres or degrees apart).
+bool same_optimum(const DenseOptimum& a, const DenseOptimum& b) {
+  return translation_error(a.transform, b.transform) < 0.05 && rotation_error_degrees(a.transform, b.transform) < 0.2;
+}
+
+// The optima to refine: within refine_band of the best coarse overlap, best first, one per local
+// optimum, at most max_refined. `twins` gets, for every other optimum in the band that is the same
+// local optimum as a contender, (its index, the contender's index).
+std::vector<std::size_t> choose_contenders(DenseSearchResult& result, const DenseSearchOptions& options,
+                                           std::vector<std::pair<std::size_t, std::size_t>>& twins) {
   double best_coarse = 0.0;
   for (const DenseOptimum& optimum : result.optima) best_coarse = std::max(best_coarse, optimum.overlap);
-  std::vector<std::size_t> contenders;
+  std::vector<std::size_t> in_band;
   for (std::size_t i = 0; i < result.optima.size(); ++i)
-    if (result.optima[i].overlap >= best_coarse - options.refine_band) contenders.push_back(i);
-  // At most `max_refined`, the best first. Low-overlap pairs (nothing aligns) put every optimum in
-  // the band; the ones left out are counted, and the search then cannot settle.
-  std::stable_sort(contenders.begin(), contenders.end(),
+    if (result.optima[i].overlap >= best_coarse - options.refine_band) in_band.push_back(i);
+  std::stable_sort(in_band.begin(), in_band.end(),
                    [&](std::size_t a, std::size_t b) { return result.optima[a].overlap > result.optima[b].overlap; });
+  std::vector<std::size_t> contenders;
+  for (const std::size_t i : in_band) {
+    const auto twin = std::find_if(contenders.begin(), contenders.end(),
+                                   [&](std::size_t c) { return same_optimum(result.optima[i], result.optima[c]); });
+    if (twin != contenders.end()) twins.emplace_back(i, *twin);
+    else contenders.push_back(i);
+  }
+  // At most `max_refined`. Low-overlap pairs (nothing aligns) put every optimum in the band; the
+  // ones left out are counted, and the search then cannot settle.
   if (contenders.size() > options.max_refined) {
     result.unrefined_contenders = contenders.size() - options.max_refined;
     contenders.resize(options.max_refined);
+    twins.erase(std::remove_if(twins.begin(), twins.end(),
+                               [&](const auto& twin) {
+                                 return std::find(contenders.begin(), contenders.end(), twin.second) == contenders.end();
+                               }),
+                twins.end());
   }
   return contenders;
 }
@@ -383,12 +404,20 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
   // their coarse values (`refined` false). On the six KITTI loop closures (85 starts each) this picks
   // the same winners as one full-size pass in about a third of the time.
   result.optima = run_coarse_pass(pair, starts, source_ground, options);
-  refine_contenders(pair, choose_contenders(result, options), source_ground, options, result.optima);
+  std::vector<std::pair<std::size_t, std::size_t>> twins;
+  refine_contenders(pair, choose_contenders(result, options, twins), source_ground, options, result.optima);
+  // A start that reached a contender's local optimum shares its refinement (refining it again gives
+  // the same result): a search with many starts near the truth is not left unsettled for them.
+  for (const auto& [twin, contender] : twins) {
+    const std::string start = result.optima[twin].start;
+    result.optima[twin] = result.optima[contender];
+    result.optima[twin].start = start;
+  }
   pick_best_and_rival(result, translation_disagreement, rotation_disagreement_degrees);
-  // An optimum reached from a global start was found by a search over every yaw and translation
-  // within its reach, so no better optimum hides just beyond the grid's edge for it.
-  const bool from_global_start = result.best >= starts.first_global && result.best < starts.first_global + starts.global_count;
-  result.best_in_grid = from_global_start || lies_inside_grid(result.optima[result.best].transform, answer, axes, options);
+  // Global starts (a search over every yaw and translation within its reach) cover the scene, so
+  // the grid's edge bounds nothing: a better optimum cannot hide just beyond it unseen.
+  result.best_in_searched_region =
+      starts.global_count > 0 || lies_inside_grid(result.optima[result.best].transform, answer, axes, options);
   return result;
 }
 

@@ -65,7 +65,7 @@ struct DenseSearchResult {
   std::size_t best = 0;                                          ///< index of the highest overlap in `optima`
   std::optional<std::size_t> rival;                              ///< the highest-overlap optimum that disagrees with the best, if any
   double margin = 0.0;                                           ///< best overlap minus the rival's (the best overlap when there is no rival)
-  bool best_in_grid = false;                                     ///< the best lies inside the grid of starts (within range - step along, across_range across) or was reached from a global start; else the search cannot settle
+  bool best_in_searched_region = false;                         ///< global starts were given, or the best lies inside the grid of starts (within range - step along, across_range across); else the search cannot settle
   std::size_t unrefined_contenders = 0;                          ///< optima within refine_band of the best left unrefined (beyond max_refined): the search cannot settle
   std::size_t source_points = 0;                                 ///< thinned source points ICP aligned
   std::size_t target_points = 0;                                 ///< thinned target points with a normal

@@ -441,7 +441,7 @@ PointCloud crop_to_range(const PointCloud& cloud, const ExtractionOptions& extra
 bool dense_search_settles(const DenseSearchResult& search, const DenseSearchOptions& options) {
   const DenseOptimum& best = search.optima[search.best];
   return search.margin >= options.decisive_margin && search.unrefined_contenders == 0 &&
-         best.overlap >= options.minimum_overlap && search.best_in_grid;
+         best.overlap >= options.minimum_overlap && search.best_in_searched_region;
 }
 
 // The dense search's account for the message: direction, both optima, margin, and what failed.
@@ -468,7 +468,7 @@ std::string describe_dense_search(const DenseSearchResult& search, const Registr
   why << ": not settled (margin " << search.margin;
   if (search.margin < options.decisive_margin) why << " < " << options.decisive_margin;
   if (best.overlap < options.minimum_overlap) why << ", best overlap below " << options.minimum_overlap;
-  if (!search.best_in_grid) why << ", best optimum outside the grid searched around the answer";
+  if (!search.best_in_searched_region) why << ", best optimum outside the grid searched around the answer (and no global start)";
   if (search.unrefined_contenders > 0)
     why << ", " << search.unrefined_contenders << " optima within " << options.refine_band
         << " of the best left unrefined beyond max_refined " << options.max_refined;

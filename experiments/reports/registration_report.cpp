@@ -144,7 +144,7 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                               {"rival", search.rival ? nlohmann::json(*search.rival) : nlohmann::json(nullptr)},
                               {"margin", search.margin},
                               {"unrefined_contenders", search.unrefined_contenders},
-                              {"best_in_grid", search.best_in_grid},
+                              {"best_in_searched_region", search.best_in_searched_region},
                               {"source_points", search.source_points},
                               {"target_points", search.target_points},
                               {"optima", optima}};

@@ -521,28 +521,28 @@ TEST(RegisterCloudsRealData, PaperDemoPairKitti0To4438Succeeds) {
       << registration_status_name(outcome.status);
 }
 
-// The paper's hard loop-closure bin starts at 20 m (KITTI-LC easy / medium / hard: 0-10 / 10-20 /
-// 20-30 m). The default geometry-only pipeline holds below it; in the hard bin its classes keep too
-// few quadrics in place to match, so there the test asserts only that no answer is `ok` and wrong.
-constexpr double kHardBinMetres = 20.0;
-
-TEST(RegisterCloudsRealData, KittiPairsOfPairsTsvSucceedAndAreNeverOkAndWrong) {
+// Every KITTI pair of pairs.tsv, the paper's hard bin (KITTI-LC easy / medium / hard: 0-10 / 10-20 /
+// 20-30 m) included: each must succeed (paper rule: RTE <= 2 m, RRE <= 5 deg) and be `ok`, so none
+// is `ok` and wrong. The hard pair (kitti00_odo_52_88, 29.9 m) is solved by the correlation over
+// yaw and ground translation, which hands the dense search a start near the truth.
+TEST(RegisterCloudsRealData, KittiPairsOfPairsTsvSucceedAndAreOk) {
   QUADRIX_REQUIRE_SHARED_DATA("pairs.tsv");
   const std::vector<PairRow> rows = kitti_pairs();
   ASSERT_FALSE(rows.empty());
   int successes = 0;
-  std::string failures, confident_and_wrong;
+  std::string failures, not_ok, confident_and_wrong;
   for (const PairRow& row : rows) {
     if (!std::filesystem::exists(testing::shared_data_path(row.source))) GTEST_SKIP() << "absent: " << row.source;
     const KittiOutcome outcome = register_kitti_pair(row);
-    // `ok` means the answer is right (paper rule: RTE <= 2 m, RRE <= 5 deg) on every pair, solved or not.
     if (outcome.status == RegistrationStatus::Ok && !outcome.success) confident_and_wrong += " " + row.id;
+    if (outcome.status != RegistrationStatus::Ok) not_ok += " " + row.id;
     if (outcome.success) ++successes;
-    else if (row.distance < kHardBinMetres) failures += " " + row.id;
+    else failures += " " + row.id;
   }
-  std::printf("KITTI pairs: %d of %zu succeed (success asserted below %.0f m)\n", successes, rows.size(), kHardBinMetres);
+  std::printf("KITTI pairs: %d of %zu succeed\n", successes, rows.size());
   EXPECT_TRUE(confident_and_wrong.empty()) << "ok and wrong:" << confident_and_wrong;
   EXPECT_TRUE(failures.empty()) << "failed:" << failures;
+  EXPECT_TRUE(not_ok.empty()) << "not ok:" << not_ok;
 }
 
 }  // namespace

@@ -97,7 +97,7 @@ TEST(RegisterRealPairs, DenseSearchNeverSettlesAnAnswerWrongly) {
       std::printf("%-18s %4.0f m off: %-9s RTE %6.3f m RRE %5.3f deg margin %.3f best %s (%.3f)%s dense %.0f ms\n",
                   pair.id.c_str(), offset, registration_status_name(result.status), translation_error(result.transform, truth),
                   rotation_error_degrees(result.transform, truth), search.margin, search.optima[search.best].start.c_str(),
-                  search.optima[search.best].overlap, search.best_in_grid ? "" : " outside the grid",
+                  search.optima[search.best].overlap, search.best_in_searched_region ? "" : " outside the grid",
                   result.timings_ms.at("dense_search"));
       if (result.status == RegistrationStatus::Ok) {
         EXPECT_LT(translation_error(result.transform, truth), 0.3);
