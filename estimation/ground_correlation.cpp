@@ -19,6 +19,8 @@ namespace quadrix {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kFarthest = 1e6;                           // m; levelled points beyond are dropped
+constexpr std::size_t kMaximumCells = std::size_t(1) << 26;  // 64 MB of target grid: a scan 8 km across at 1 m
 
 // A scan seen from above: its points in the band above its ground, in a frame whose z is the
 // ground normal, projected onto the ground.
@@ -38,7 +40,10 @@ LevelledScan level(const PointCloud& cloud, const Eigen::Vector4d& ground, const
     if (!point.allFinite()) continue;
     const double height = normal.dot(point) + scan.ground_offset;
     if (height < options.minimum_height || height > options.maximum_height) continue;
-    scan.points.push_back((scan.levelling * point).head<2>());
+    const Eigen::Vector2d levelled = (scan.levelling * point).head<2>();
+    // Farther than any scanner reaches: a stray value, whose cell index would overflow an int.
+    if (levelled.cwiseAbs().maxCoeff() > kFarthest) continue;
+    scan.points.push_back(levelled);
   }
   return scan;
 }
@@ -82,6 +87,10 @@ struct OccupancyGrid {
     }
     width = high.x() - low.x() + 1;
     height = high.y() - low.y() + 1;
+    if (static_cast<std::size_t>(width) * static_cast<std::size_t>(height) > kMaximumCells) {
+      width = height = 0;  // too large to hold: an empty grid, which no pose lands on
+      return;
+    }
     occupied.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
     for (const Eigen::Vector2d& point : points) occupied[offset(cell_of(point, cell) - low)] = 1;
   }

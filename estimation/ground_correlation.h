@@ -49,7 +49,8 @@ struct GroundPose {
 /// The poses that best overlay the two scans' bird's-eye occupancy above their grounds, best first.
 /// `source_ground` and `target_ground` are each cloud's ground plane (n, d) with n . x + d = 0 and
 /// n pointing up. The returned transforms put the source ground on the target ground. Empty when
-/// either cloud has no point in the height band or `options.poses` is 0.
+/// either cloud has no point in the height band, `options.poses` is 0, or the target's band spans
+/// more than 2^26 cells (8 km across at 1 m); points farther than 1,000 km are left out.
 /// Throws quadrix::Error for options out of range (validate_ground_correlation_options).
 std::vector<GroundPose> correlate_over_ground(const PointCloud& source, const PointCloud& target,
                                               const Eigen::Vector4d& source_ground, const Eigen::Vector4d& target_ground,

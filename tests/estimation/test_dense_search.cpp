@@ -291,6 +291,13 @@ TEST(DenseSearch, CorrelationOverTheGroundFindsYawAndTranslation) {
   flat.positions = Eigen::Matrix3Xf::Zero(3, 10);
   flat.positions.row(2).setConstant(-1.0f);
   EXPECT_TRUE(correlate_over_ground(flat, flat, Eigen::Vector4d(0, 0, 1, 1), Eigen::Vector4d(0, 0, 1, 1)).empty());
+  // A target spread over 40 km (too large a grid) and a stray value: no pose, no crash.
+  PointCloud spread;
+  spread.positions = Eigen::Matrix3Xf::Zero(3, 3);
+  spread.positions.col(0) << -20000.0f, -20000.0f, 1.0f;
+  spread.positions.col(1) << 20000.0f, 20000.0f, 1.0f;
+  spread.positions.col(2) << 3e30f, 0.0f, 1.0f;
+  EXPECT_TRUE(correlate_over_ground(spread, spread, Eigen::Vector4d(0, 0, 1, 1), Eigen::Vector4d(0, 0, 1, 1)).empty());
   // Options out of range are named.
   GroundCorrelationOptions options;
   options.maximum_height = options.minimum_height;
