@@ -35,8 +35,9 @@ struct GroundCorrelationOptions {
 };
 
 /// Throws quadrix::Error naming the first option out of range (e.g. "option
-/// 'dense_search.correlation.reach' must be positive, got 0"): reach, yaw_step_degrees (at most 180),
-/// coarse_cell, fine_cell positive, maximum_height above minimum_height, separations not negative.
+/// 'dense_search.correlation.reach' must be positive, got 0"): reach positive, yaw_step_degrees in
+/// (0, 180], coarse_cell and fine_cell at least 0.05 m, maximum_height above minimum_height,
+/// separations not negative.
 void validate_ground_correlation_options(const GroundCorrelationOptions& options);
 
 /// One pose the correlation proposes.

@@ -1,14 +1,17 @@
 // The dense search that settles ambiguous answers (estimation/dense_search.h) on the real 3DTK pair
 // 2->0 (81k points a scan, the robot's self-hits within 2 m cropped as `auto` does): one
 // point-to-plane ICP from the identity, and the whole search along the weakest direction (17 shifts
-// plus the identity). Skips with a message when ../shared/data is absent.
+// plus the identity); and the correlation over yaw and ground translation on KITTI-00 frames
+// 52 -> 88 (29.9 m apart). Skips with a message when ../shared/data is absent.
 #include "estimation/dense_search.h"
+#include "estimation/ground_correlation.h"
 #include "geometry/io.h"
 
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace {
@@ -63,6 +66,20 @@ void BM_SearchWeakestDirection3dtk(benchmark::State& state) {
                                  .margin);
 }
 BENCHMARK(BM_SearchWeakestDirection3dtk)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The correlation over yaw and ground translation (estimation/ground_correlation.h) on KITTI-00
+// frames 52 -> 88, 29.9 m apart, with the ground each frame's sensor sees 1.73 m below it.
+void BM_CorrelateOverGroundKitti52To88(benchmark::State& state) {
+  const std::string source_path = data_path("kitti00/velodyne/000052.bin"), target_path = data_path("kitti00/velodyne/000088.bin");
+  if (!std::filesystem::exists(source_path) || !std::filesystem::exists(target_path)) {
+    state.SkipWithError(("real data absent: " + source_path).c_str());
+    return;
+  }
+  const quadrix::PointCloud source = quadrix::read_point_cloud(source_path), target = quadrix::read_point_cloud(target_path);
+  const Eigen::Vector4d ground(0.0, 0.0, 1.0, 1.73);
+  for (auto _ : state) benchmark::DoNotOptimize(quadrix::correlate_over_ground(source, target, ground, ground).size());
+}
+BENCHMARK(BM_CorrelateOverGroundKitti52To88)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 
