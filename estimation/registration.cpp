@@ -684,6 +684,7 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
       const std::vector<GroundPose> poses =
           correlate_over_ground(cropped_source, cropped_target, *source_ground, *target_ground, options.dense_search.correlation);
       for (const GroundPose& pose : poses) global_starts.push_back(pose.transform);
+      result.ground_correlation = poses;
       std::ostringstream why;
       why.precision(3);
       why << "; correlation over the ground: " << poses.size() << " poses";

@@ -170,6 +170,7 @@ struct RegistrationResult {
   SceneModel target_model;                                      ///< R_y
   std::optional<OverlapMeasure> overlap;                        ///< dense overlap of the answer (check_overlap: register_clouds and the benchmark)
   std::optional<DenseSearchResult> dense_search;                ///< the search along the weakest direction, when an ambiguous answer ran it
+  std::vector<GroundPose> ground_correlation;                   ///< the correlation over the ground's poses, best first, which the dense search started from (empty when it did not run)
   std::optional<HalfTurnCheck> half_turn;                       ///< the last half-turn check (check_half_turn), when one ran
 };
 

@@ -149,6 +149,12 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                               {"target_points", search.target_points},
                               {"optima", optima}};
   }
+  if (!result.ground_correlation.empty()) {
+    nlohmann::json poses = nlohmann::json::array();
+    for (const GroundPose& pose : result.ground_correlation)
+      poses.push_back({{"share", pose.share}, {"yaw_deg", pose.yaw_degrees}, {"transform", matrix_json(pose.transform)}});
+    report["ground_correlation"] = poses;
+  }
   if (result.half_turn) {
     const HalfTurnCheck& check = *result.half_turn;
     report["half_turn"] = {{"pivot", {check.pivot.x(), check.pivot.y(), check.pivot.z()}},

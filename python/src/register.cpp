@@ -64,6 +64,8 @@ as an answer when it is ok.
                              "report.json's overlap {distance_m, transformed, identity, sampled_points}.")
       .def_property_readonly("dense_search", [](const Registration& r) { return report_entry(r, "dense_search"); },
                              "report.json's dense_search, or None when the dense search did not run.")
+      .def_property_readonly("ground_correlation", [](const Registration& r) { return report_entry(r, "ground_correlation"); },
+                             "report.json's ground_correlation (poses with share, yaw_deg, transform, best first), or None when it did not run.")
       .def_property_readonly("half_turn", [](const Registration& r) { return report_entry(r, "half_turn"); },
                              "report.json's half_turn, or None when the half-turn check did not run.")
       .def_property_readonly("ground_truth", [](const Registration& r) { return report_entry(r, "ground_truth"); },

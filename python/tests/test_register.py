@@ -86,6 +86,24 @@ def test_kitti_loop_closure_matches_the_command_line(tmp_path, shared_data, quad
     assert result.ground_truth == printed["ground_truth"]
 
 
+def test_the_kitti_pair_thirty_metres_apart_is_found_by_the_ground_correlation(shared_data):
+    source = shared_data("kitti00/velodyne/000052.bin")
+    target = shared_data("kitti00/velodyne/000088.bin")
+    truth = np.loadtxt(shared_data("kitti00/gt/T_000088_from_000052.txt")).reshape(4, 4)
+    result = quadrix.register(str(source), str(target), ground_truth=truth)
+    assert result.status == "ok", result.message
+    assert result.ground_truth["success"] is True
+    poses = result.ground_correlation
+    assert poses is not None and 1 <= len(poses) <= 6
+    shares = [pose["share"] for pose in poses]
+    assert shares == sorted(shares, reverse=True) and 0.0 < shares[0] <= 1.0
+    # One of the poses the dense search started from lies near the truth, and the search's best came from it.
+    nearest = min(np.linalg.norm(np.array(pose["transform"])[:3, 3] - truth[:3, 3]) for pose in poses)
+    assert nearest < 1.5
+    best = result.dense_search["optima"][result.dense_search["best"]]
+    assert best["start"].startswith("correlation"), best["start"]
+
+
 def test_refiner_and_presets_are_checked():
     points = np.random.default_rng(1).uniform(-10, 10, (100, 3))
     with pytest.raises(ValueError, match="gauss"):

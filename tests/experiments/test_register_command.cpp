@@ -392,6 +392,17 @@ TEST(RegistrationReport, JsonFollowsTheContractAndPicturesAreWritten) {
   EXPECT_EQ(searched["dense_search"]["best"], 1);
   EXPECT_EQ(searched["dense_search"]["rival"], 0);
   EXPECT_DOUBLE_EQ(searched["dense_search"]["weakest_direction"][1].get<double>(), 1.0);
+  EXPECT_FALSE(searched.contains("ground_correlation")) << "only when the correlation ran";
+  GroundPose pose;
+  pose.share = 0.375;
+  pose.yaw_degrees = -90.0;
+  pose.transform.translation() = Eigen::Vector3d(12.0, 0.5, 0.0);
+  result.ground_correlation = {pose};
+  const nlohmann::json correlated = nlohmann::json::parse(registration_report_json(result, context));
+  ASSERT_EQ(correlated["ground_correlation"].size(), 1u);
+  EXPECT_DOUBLE_EQ(correlated["ground_correlation"][0]["share"].get<double>(), 0.375);
+  EXPECT_DOUBLE_EQ(correlated["ground_correlation"][0]["yaw_deg"].get<double>(), -90.0);
+  EXPECT_DOUBLE_EQ(correlated["ground_correlation"][0]["transform"][0][3].get<double>(), 12.0);
 
   PointCloud source;
   source.positions = Eigen::Matrix3Xf::Random(3, 500) * 20.0f;
