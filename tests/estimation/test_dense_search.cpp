@@ -155,6 +155,28 @@ TEST(DenseSearch, PointToPlaneIcpRecoversASmallOffset) {
   }
 }
 
+// Starts that reach one local optimum count as one contender: twenty starts at the truth, with room
+// to refine only two optima, still leave nothing unrefined, and every one of them ends refined at
+// the same place.
+TEST(DenseSearch, StartsReachingOneOptimumShareItsRefinement) {
+  std::mt19937 rng(5);
+  const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(1.0, 0.5, 4.0), 20.0, 40000, rng);
+  DenseSearchOptions options;
+  options.range = options.across_range = 0.0;  // one grid start: the answer
+  options.max_refined = 2;
+  const std::vector<Eigen::Isometry3d> same_starts(20, pair.truth);
+  const DenseSearchResult search = search_weakest_direction(pair.source, pair.target, pair.truth, same_starts, {},
+                                                            Eigen::Vector3d::UnitZ(), std::nullopt, 2.0, 5.0, options);
+  EXPECT_EQ(search.unrefined_contenders, 0u);
+  const DenseOptimum& best = search.optima[search.best];
+  EXPECT_LT(translation_error(best.transform, pair.truth), 0.05);
+  for (std::size_t i = 0; i <= same_starts.size(); ++i) {  // the answer's start, then the twenty
+    EXPECT_TRUE(search.optima[i].refined) << search.optima[i].start;
+    EXPECT_DOUBLE_EQ(search.optima[i].overlap, best.overlap) << search.optima[i].start;
+  }
+  EXPECT_EQ(search.optima[1].start, "candidate 0") << "each start keeps its own name";
+}
+
 // An `ambiguous` answer two pillars off along the colonnade: verify_registration finds the truth.
 TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
   std::mt19937 rng(7);
