@@ -692,10 +692,12 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
       result.message += why.str();
     });
   timed(result, "dense_search", [&] { settle_with_dense_search(result, cropped_source, cropped_target, global_starts, options); });
-  // The new answer, under the same guards.
+  // The new answer, under the same guards. A half-turned rival that fits it clearly better takes
+  // its place, `ambiguous` (the dense search is not run again): on the tuning set under random yaw
+  // one settled answer of 68 was a street's mirror image, and its rival the truth.
   if (result.findings.settled_by_dense_search) {
     check_overlap(result, cropped_source, cropped_target, options.ambiguity);
-    check_half_turn(result, cropped_source, cropped_target, options, false);
+    check_half_turn(result, cropped_source, cropped_target, options);
   }
 }
 
