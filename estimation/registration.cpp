@@ -444,6 +444,13 @@ bool dense_search_settles(const DenseSearchResult& search, const DenseSearchOpti
          best.overlap >= options.minimum_overlap && search.best_in_searched_region;
 }
 
+// A clear winner the search could not settle only because it lands too little of the source on
+// the target (below dense_search.minimum_overlap): every other rule of dense_search_settles holds.
+bool clear_winner_below_floor(const DenseSearchResult& search, const DenseSearchOptions& options) {
+  return search.margin >= options.decisive_margin && search.unrefined_contenders == 0 && search.best_in_searched_region &&
+         search.optima[search.best].overlap < options.minimum_overlap;
+}
+
 // The dense search's account for the message: direction, both optima, margin, and what failed.
 std::string describe_dense_search(const DenseSearchResult& search, const RegistrationResult& result, bool settled,
                                   const DenseSearchOptions& options) {
@@ -472,7 +479,7 @@ std::string describe_dense_search(const DenseSearchResult& search, const Registr
   if (search.unrefined_contenders > 0)
     why << ", " << search.unrefined_contenders << " optima within " << options.refine_band
         << " of the best left unrefined beyond max_refined " << options.max_refined;
-  why << "), the quadric answer stands";
+  why << (clear_winner_below_floor(search, options) ? "), its best optimum becomes the best guess" : "), the quadric answer stands");
   return why.str();
 }
 
@@ -555,7 +562,14 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
   result.message += describe_dense_search(search, result, settled, options.dense_search);
   result.dense_search = search;
   result.findings.settled_by_dense_search = settled;
-  if (!settled) return;
+  if (!settled) {
+    // A clear winner that lands too little of the source to be called `ok` (outliers and low
+    // overlap keep it below the floor) is still a better guess than the quadric answer it beat: it
+    // becomes the answer, `ambiguous`. On the tuning set's hard bin with 10% outliers this took
+    // success from 72 to 90 of 100 and changed no status of the clean tuning set.
+    if (clear_winner_below_floor(search, options.dense_search)) result.transform = search.optima[search.best].transform;
+    return;
+  }
   result.transform = search.optima[search.best].transform;
   result.findings.fits_worse_than_identity = false;  // measured again on the new answer below
   result.findings.overlaps_too_little = false;

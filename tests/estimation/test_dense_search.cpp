@@ -210,6 +210,36 @@ TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
   }
 }
 
+// The same colonnade with stray points added to the source (a fifth as many as scene points, but
+// spread through the air, so more than the scene's after thinning; they never land on the
+// target): the truth still wins clearly but lands less than the 40% floor of the source, so it is
+// not `ok`; it becomes the best guess, `ambiguous`, instead of the answer two pillars off.
+TEST(DenseSearch, ClearWinnerBelowTheFloorBecomesTheBestGuess) {
+  std::mt19937 rng(13);
+  ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(3.7, 0.2, 0.0), 18.0, 60000, rng);
+  const Eigen::Index scene_points = pair.source.positions.cols(), strays = scene_points / 5;
+  pair.source.positions.conservativeResize(3, scene_points + strays);
+  std::uniform_real_distribution<float> across(-20.0f, 20.0f), height(-0.4f, 2.0f);  // 0.6-3 m above the ground (z = -1)
+  for (Eigen::Index i = scene_points; i < scene_points + strays; ++i)
+    pair.source.positions.col(i) << across(rng), across(rng), height(rng);
+  RegistrationResult result;
+  result.status = RegistrationStatus::Ambiguous;
+  result.transform = pair.truth;
+  result.transform.pretranslate(Eigen::Vector3d(-5.0, 0.0, 0.0));
+  set_ground(result);
+  RegistrationOptions options;
+  verify_registration(result, pair.source, pair.target, options);
+  ASSERT_TRUE(result.dense_search.has_value());
+  const DenseSearchResult& search = *result.dense_search;
+  std::printf("best %s overlap %.3f, margin %.3f: %s\n", search.optima[search.best].start.c_str(),
+              search.optima[search.best].overlap, search.margin, result.message.c_str());
+  EXPECT_LT(search.optima[search.best].overlap, options.dense_search.minimum_overlap) << "the outliers keep it below the floor";
+  EXPECT_GE(search.margin, options.dense_search.decisive_margin);
+  EXPECT_EQ(result.status, RegistrationStatus::Ambiguous) << result.message;
+  EXPECT_LT(translation_error(result.transform, pair.truth), 0.1) << result.message;
+  EXPECT_NE(result.message.find("best guess"), std::string::npos) << result.message;
+}
+
 // Nothing tells positions along a straight corridor apart: not settled, the quadric answer stands.
 TEST(DenseSearch, FeaturelessCorridorIsNotSettled) {
   std::mt19937 rng(11);
