@@ -15,7 +15,6 @@
 #include <iomanip>
 #include <memory>
 #include <mutex>
-#include <numeric>
 #include <sstream>
 #include <optional>
 #include <unordered_set>

@@ -435,20 +435,23 @@ PointCloud crop_to_range(const PointCloud& cloud, const ExtractionOptions& extra
   return cropped;
 }
 
+// The dense search's best optimum beats every distinct optimum by the margin, with every close
+// contender refined and inside the region searched (the rules of a settle but the overlap floor).
+bool clear_winner(const DenseSearchResult& search, const DenseSearchOptions& options) {
+  return search.margin >= options.decisive_margin && search.unrefined_contenders == 0 && search.best_in_searched_region;
+}
+
 // Whether the dense search's winner may replace the answer: clear of every distinct optimum, all close
 // contenders refined, enough of the source on the target, and inside the grid searched around the
 // answer (outside it, the winner is a local optimum of a grid that missed the truth).
 bool dense_search_settles(const DenseSearchResult& search, const DenseSearchOptions& options) {
-  const DenseOptimum& best = search.optima[search.best];
-  return search.margin >= options.decisive_margin && search.unrefined_contenders == 0 &&
-         best.overlap >= options.minimum_overlap && search.best_in_searched_region;
+  return clear_winner(search, options) && search.optima[search.best].overlap >= options.minimum_overlap;
 }
 
 // A clear winner the search could not settle only because it lands too little of the source on
-// the target (below dense_search.minimum_overlap): every other rule of dense_search_settles holds.
+// the target (below dense_search.minimum_overlap).
 bool clear_winner_below_floor(const DenseSearchResult& search, const DenseSearchOptions& options) {
-  return search.margin >= options.decisive_margin && search.unrefined_contenders == 0 && search.best_in_searched_region &&
-         search.optima[search.best].overlap < options.minimum_overlap;
+  return clear_winner(search, options) && search.optima[search.best].overlap < options.minimum_overlap;
 }
 
 // The dense search's account for the message: direction, both optima, margin, and what failed.
@@ -547,12 +550,15 @@ Eigen::Vector3d target_up(const RegistrationResult& result, const RegistrationOp
 
 // Settles an `ambiguous` answer with the dense search along the weakest direction (search_weakest_direction).
 void settle_with_dense_search(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                              const std::vector<Eigen::Isometry3d>& global_starts, const RegistrationOptions& options) {
+                              const RegistrationOptions& options) {
   std::vector<Eigen::Isometry3d> other_starts;
   for (std::size_t i = 0; i < result.candidates.size(); ++i)
     if (result.candidates[i].valid && i != result.best_candidate) other_starts.push_back(result.candidates[i].transform);
   // The mirror image the half-turn check found competes too.
   if (result.half_turn && result.half_turn->has_rival) other_starts.push_back(result.half_turn->rival);
+  // The correlation over the ground's poses are global starts.
+  std::vector<Eigen::Isometry3d> global_starts;
+  for (const GroundPose& pose : result.ground_correlation) global_starts.push_back(pose.transform);
   std::optional<Eigen::Vector3d> up;
   if (result.target_model.has_ground) up = result.target_model.ground_normal;
   const DenseSearchResult search = search_weakest_direction(
@@ -691,21 +697,19 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
     return;
   // The dense search also starts from the poses of the correlation over yaw and ground translation,
   // which reach answers no quadric candidate is near (hard pairs whose cliques hold no true inlier).
-  std::vector<Eigen::Isometry3d> global_starts;
   const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
   if (options.dense_search.correlation.poses > 0 && source_ground && target_ground)
     timed(result, "ground_correlation", [&] {
-      const std::vector<GroundPose> poses =
+      result.ground_correlation =
           correlate_over_ground(cropped_source, cropped_target, *source_ground, *target_ground, options.dense_search.correlation);
-      for (const GroundPose& pose : poses) global_starts.push_back(pose.transform);
-      result.ground_correlation = poses;
+      const std::vector<GroundPose>& poses = result.ground_correlation;
       std::ostringstream why;
       why.precision(3);
       why << "; correlation over the ground: " << poses.size() << " poses";
       if (!poses.empty()) why << ", best lands " << poses.front().share << " of the source cells at yaw " << poses.front().yaw_degrees << " deg";
       result.message += why.str();
     });
-  timed(result, "dense_search", [&] { settle_with_dense_search(result, cropped_source, cropped_target, global_starts, options); });
+  timed(result, "dense_search", [&] { settle_with_dense_search(result, cropped_source, cropped_target, options); });
   // The new answer, under the same guards. A half-turned rival that fits it clearly better takes
   // its place, `ambiguous` (the dense search is not run again): on the tuning set under random yaw
   // one settled answer of 68 was a street's mirror image, and its rival the truth.

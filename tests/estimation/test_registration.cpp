@@ -523,8 +523,8 @@ TEST(RegisterCloudsRealData, PaperDemoPairKitti0To4438Succeeds) {
 
 // Every KITTI pair of pairs.tsv, the paper's hard bin (KITTI-LC easy / medium / hard: 0-10 / 10-20 /
 // 20-30 m) included: each must succeed (paper rule: RTE <= 2 m, RRE <= 5 deg) and be `ok`, so none
-// is `ok` and wrong. The hard pair (kitti00_odo_52_88, 29.9 m) is solved by the correlation over
-// yaw and ground translation, which hands the dense search a start near the truth.
+// is `ok` and wrong. Pairs in the hard bin are solved by the correlation over yaw and ground
+// translation, which hands the dense search a start near the truth.
 TEST(RegisterCloudsRealData, KittiPairsOfPairsTsvSucceedAndAreOk) {
   QUADRIX_REQUIRE_SHARED_DATA("pairs.tsv");
   const std::vector<PairRow> rows = kitti_pairs();
