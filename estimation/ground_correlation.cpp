@@ -2,6 +2,7 @@
 // ground_correlation.h).
 #include "estimation/ground_correlation.h"
 
+#include "geometry/constants.h"
 #include "geometry/error.h"
 
 #include <tbb/parallel_for.h>
@@ -9,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -18,7 +18,6 @@ namespace quadrix {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kFarthest = 1e6;                           // m; levelled points beyond are dropped
 constexpr std::size_t kMaximumCells = std::size_t(1) << 26;  // 64 MB of target grid: a scan 8 km across at 1 m
 
@@ -170,10 +169,12 @@ std::vector<PlanarPose> coarse_pass(const std::vector<Eigen::Vector2d>& source_c
     for (const auto& [x, y] : cells) {
       const int first_i = std::max(0, -(x - steps)), last_i = std::min(side, target.width - (x - steps));
       const int first_j = std::max(0, -(y - steps)), last_j = std::min(side, target.height - (y - steps));
+      if (first_j >= last_j) continue;
       for (int i = first_i; i < last_i; ++i) {
-        const std::uint8_t* row = &target.occupied[target.offset(Eigen::Vector2i(x - steps + i, y - steps))];
-        std::uint32_t* sum = &scores[static_cast<std::size_t>(i) * static_cast<std::size_t>(side)];
-        for (int j = first_j; j < last_j; ++j) sum[j] += row[j];
+        // The target's cells (x - steps + i, y - steps + j) for j from first_j on, all inside the grid.
+        const std::uint8_t* row = &target.occupied[target.offset(Eigen::Vector2i(x - steps + i, y - steps + first_j))];
+        std::uint32_t* sum = &scores[static_cast<std::size_t>(i) * static_cast<std::size_t>(side) + static_cast<std::size_t>(first_j)];
+        for (int j = 0; j < last_j - first_j; ++j) sum[j] += row[j];
       }
     }
     std::vector<PlanarPose> poses;
