@@ -1,11 +1,13 @@
 // `quadrix model INPUT... [--poses P,...] --out model.json [--binary model.qsm] [--mesh model.ply]
-// [--elements elements.ply] [--picture model.png] [--preset P] [--labels FILE] [--fitter NAME] [--no-page]`:
+// [--elements elements.ply] [--picture model.png] [--preset P] [--labels FILE] [--score-labels FILE]
+// [--fitter NAME] [--no-page]`:
 // the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose)
 // (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling"). Beside model.json it writes the
 // interactive page model.html (quadrix view) unless --no-page.
 #include "experiments/command_line/command_registry.h"
 #include "experiments/reports/interactive_page.h"
 #include "experiments/reports/model_picture.h"
+#include "experiments/studies/modelling_evaluation.h"
 #include "estimation/registration_config.h"
 #include "fitting/scene_modelling.h"
 #include "geometry/error.h"
@@ -19,6 +21,8 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 namespace quadrix::cli {
 namespace {
@@ -29,6 +33,7 @@ struct ModelCommandOptions {
   std::string format = "auto";        ///< input format override
   std::string preset = "vlp64";       ///< extraction preset
   std::string labels;                 ///< SemanticKITTI .label file (switches to the labels semantic mode)
+  std::string score_labels;           ///< SemanticKITTI .label file the element classes are scored against (the mode is unchanged)
   std::string fitter;                 ///< QuadricFitter registry name (empty: the preset's)
   std::string plane_method = "voxel"; ///< voxel (paper) or cgal (CGAL region growing)
   std::string out;                    ///< model JSON
@@ -156,9 +161,54 @@ PointCloud read_merged_clouds(const ModelCommandOptions& options, const CloudRea
 
 // The model's header fields beside its records in model.json: inputs, preset, fitter, statuses,
 // raw size and the extracted elements per class.
+// The "class_scores" member of the model JSON: per class the counts, recall and precision, and
+// where each labelled class's points went.
+std::string class_scores_json(const ClassScores& scores) {
+  std::ostringstream json;
+  json.precision(4);
+  json << "\"class_scores\": {\"scored\": " << scores.scored << ", \"classes\": {";
+  for (std::size_t i = 0; i < scores.classes.size(); ++i) {
+    const ClassScore& score = scores.classes[i];
+    json << (i ? ", " : "") << "\"" << element_class_name(score.element_class) << "\": {\"labelled\": " << score.labelled
+         << ", \"predicted\": " << score.predicted << ", \"agreeing\": " << score.agreeing << ", \"recall\": " << score.recall
+         << ", \"precision\": " << score.precision << "}";
+  }
+  json << "}, \"confusion\": {";
+  bool first_row = true;
+  for (const auto& [truth, row] : scores.confusion) {
+    json << (first_row ? "" : ", ") << "\"" << element_class_name(truth) << "\": {";
+    bool first = true;
+    for (const auto& [modelled, count] : row) {
+      json << (first ? "" : ", ") << "\"" << modelled << "\": " << count;
+      first = false;
+    }
+    json << "}";
+    first_row = false;
+  }
+  json << "}}";
+  return json.str();
+}
+
+// The per-class table of --score-labels: recall and precision, then where each class's points went.
+void print_class_scores(const ClassScores& scores) {
+  std::printf("\nclasses against %zu labelled points in range (per point; a point in no element or in an object cluster is missed):\n",
+              scores.scored);
+  std::printf("%-12s %9s %9s %9s %7s %9s   labelled points went to\n", "class", "labelled", "modelled", "agreeing", "recall",
+              "precision");
+  for (const ClassScore& score : scores.classes) {
+    std::printf("%-12s %9zu %9zu %9zu %6.1f%% %8.1f%%  ", element_class_name(score.element_class).c_str(), score.labelled,
+                score.predicted, score.agreeing, 100.0 * score.recall, 100.0 * score.precision);
+    const auto row = scores.confusion.find(score.element_class);
+    if (row != scores.confusion.end())
+      for (const auto& [modelled, count] : row->second)
+        std::printf(" %s %.0f%%", modelled.c_str(), 100.0 * static_cast<double>(count) / static_cast<double>(score.labelled));
+    std::printf("\n");
+  }
+}
+
 std::string model_json_extra(const ModelCommandOptions& options, const ModellingOptions& modelling,
                              const ModellingResult& result, double raw_bytes,
-                             const std::map<std::string, int>& element_counts) {
+                             const std::map<std::string, int>& element_counts, const std::optional<ClassScores>& scores) {
   std::string extra = "\"input\": \"" + std::filesystem::path(options.inputs.front()).filename().string() + "\", \"inputs\": " +
                       std::to_string(options.inputs.size()) + ", \"preset\": \"" +
                       options.preset + "\", \"fitter\": \"" + modelling.fitter + "\", \"status\": \"" +
@@ -170,7 +220,9 @@ std::string model_json_extra(const ModelCommandOptions& options, const Modelling
     extra += std::string(first ? "" : ", ") + "\"" + name + "\": " + std::to_string(count);
     first = false;
   }
-  return extra + "}";
+  extra += "}";
+  if (scores) extra += ", " + class_scores_json(*scores);
+  return extra;
 }
 
 // The mesh of every quadric (--mesh) and its picture (--picture), when asked for.
@@ -284,8 +336,13 @@ void run(const ModelCommandOptions& options) {
     labels = read_semantic_kitti_labels(options.labels, cloud.size());
     extraction.semantic_mode = SemanticMode::Labels;
   }
+  // Read before modelling, so a bad file fails at once.
+  std::vector<std::uint32_t> score_labels;
+  if (!options.score_labels.empty()) score_labels = read_semantic_kitti_labels(options.score_labels, cloud.size());
   const ModellingResult result = model_scene(cloud, extraction, modelling, labels);
   const SceneModel& model = result.model;
+  std::optional<ClassScores> scores;
+  if (!options.score_labels.empty()) scores = score_element_classes(cloud, result.extraction, score_labels, extraction);
 
   // Counts per class and type (quadrics kept in the model; elements extracted).
   std::map<std::pair<std::string, std::string>, int> quadric_counts;
@@ -298,7 +355,7 @@ void run(const ModelCommandOptions& options) {
   for (const std::string& input : options.inputs)
     if (std::filesystem::exists(input)) raw_bytes += static_cast<double>(std::filesystem::file_size(input));
 
-  write_scene_model_json(options.out, model, model_json_extra(options, modelling, result, raw_bytes, element_counts));
+  write_scene_model_json(options.out, model, model_json_extra(options, modelling, result, raw_bytes, element_counts, scores));
   if (!options.binary.empty()) write_scene_model_binary(options.binary, model);
   const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
   write_mesh_outputs(options, result, points);
@@ -306,6 +363,7 @@ void run(const ModelCommandOptions& options) {
   const std::string page_path = write_model_page(options, modelling, result, cloud, points);
   print_model_summary(options, modelling, result, cloud, quadric_counts, element_counts, binary_bytes.size(), raw_bytes,
                       page_path);
+  if (scores) print_class_scores(*scores);
 }
 
 const CommandRegistration registration(50, [](CLI::App& app) {
@@ -323,6 +381,9 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   command->add_option("--preset", options->preset, "Sensor preset: " + presets)->capture_default_str();
   command->add_option("--labels", options->labels,
                       "SemanticKITTI .label file: use the labels semantic mode instead of geometry-only clusters");
+  command->add_option("--score-labels", options->score_labels,
+                      "SemanticKITTI .label file: score the element classes against it per point (recall, precision, "
+                      "where each class went); printed and written to the model JSON as class_scores");
   std::string fitters;
   for (const auto& name : quadric_fitter_names()) fitters += (fitters.empty() ? "" : ", ") + name;
   command->add_option("--fitter", options->fitter,

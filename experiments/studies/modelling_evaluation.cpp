@@ -123,4 +123,47 @@ ModellingEvaluation evaluate_modelling(const Scene& scene, const std::vector<flo
   return evaluation;
 }
 
+ClassScores score_element_classes(const PointCloud& cloud, const ExtractionResult& extraction,
+                                  const std::vector<std::uint32_t>& labels, const ExtractionOptions& options) {
+  if (labels.size() != cloud.size())
+    throw Error("score_element_classes: " + std::to_string(labels.size()) + " labels for " + std::to_string(cloud.size()) +
+                " points (expected one label per point)");
+  // The class each point was modelled as; -1: in no element.
+  std::vector<int> predicted(cloud.size(), -1);
+  for (const Element& element : extraction.elements)
+    for (const std::uint32_t index : element.point_indices) {
+      if (index >= cloud.size())
+        throw Error("score_element_classes: an element holds point " + std::to_string(index) + " of a cloud of " +
+                    std::to_string(cloud.size()) + " points");
+      predicted[index] = static_cast<int>(element.element_class);
+    }
+  ClassScores scores;
+  const std::vector<ElementClass> scored_classes = {ElementClass::Ground,  ElementClass::Plane, ElementClass::Line,
+                                                    ElementClass::Vehicle, ElementClass::Trunk, ElementClass::Vegetation};
+  std::map<ElementClass, ClassScore> by_class;
+  for (const ElementClass element_class : scored_classes) by_class[element_class].element_class = element_class;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    ElementClass truth = ElementClass::Object;
+    if (!element_class_for_semantic_kitti_label(labels[i], truth) || !within_range(cloud.point(i), options)) continue;
+    ++scores.scored;
+    const bool in_element = predicted[i] >= 0;
+    const ElementClass modelled = in_element ? static_cast<ElementClass>(predicted[i]) : ElementClass::Object;
+    ++scores.confusion[truth][in_element ? element_class_name(modelled) : "none"];
+    const auto truth_score = by_class.find(truth);
+    if (truth_score != by_class.end()) ++truth_score->second.labelled;
+    const auto modelled_score = by_class.find(modelled);
+    if (in_element && modelled_score != by_class.end()) {
+      ++modelled_score->second.predicted;
+      modelled_score->second.agreeing += modelled == truth ? 1 : 0;
+    }
+  }
+  for (const ElementClass element_class : scored_classes) {
+    ClassScore score = by_class[element_class];
+    score.recall = score.labelled > 0 ? static_cast<double>(score.agreeing) / static_cast<double>(score.labelled) : 0.0;
+    score.precision = score.predicted > 0 ? static_cast<double>(score.agreeing) / static_cast<double>(score.predicted) : 0.0;
+    scores.classes.push_back(score);
+  }
+  return scores;
+}
+
 }  // namespace quadrix

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "experiments/synthetic/synthetic_output.h"
+#include "fitting/extraction.h"
 #include "fitting/scene_modelling.h"
 #include "geometry/point_cloud.h"
 
@@ -62,5 +63,33 @@ struct ModellingEvaluation {
 ModellingEvaluation evaluate_modelling(const Scene& scene, const std::vector<float>& primitive_ids,
                                        const ModellingResult& result, std::size_t minimum_points = 200,
                                        double minimum_share = 0.5);
+
+/// How one class's points fared: a modelling run's element classes against per-point labels.
+struct ClassScore {
+  ElementClass element_class = ElementClass::Ground;  ///< the class scored
+  std::size_t labelled = 0;   ///< scored points whose label maps to this class
+  std::size_t predicted = 0;  ///< scored points in an element of this class
+  std::size_t agreeing = 0;   ///< scored points both labelled and predicted as this class
+  double recall = 0.0;        ///< agreeing / labelled (0 when none is labelled)
+  double precision = 0.0;     ///< agreeing / predicted (0 when none is predicted)
+};
+
+/// Per-point agreement of an extraction's element classes with SemanticKITTI labels.
+struct ClassScores {
+  std::vector<ClassScore> classes;  ///< ground, plane, line, vehicle, trunk, vegetation, in this order
+  std::size_t scored = 0;           ///< points within the extraction's range whose label maps to a class
+  std::map<ElementClass, std::map<std::string, std::size_t>> confusion;  ///< labelled class -> where its scored points went: an element class name (element_class_name), or "none" when in no element
+};
+
+/// Scores the classes of `extraction` (of `cloud`) against `labels`, one SemanticKITTI label per
+/// point of `cloud`, mapped by element_class_for_semantic_kitti_label (pole and traffic sign are
+/// Line, building and fence Plane, road and sidewalk Ground...). Points outside the extraction's
+/// range (within_range with `options`) and points whose label maps to no class (unlabelled,
+/// person, other-object) are not scored. A point's prediction is the class of the element holding
+/// it; a point in no element, or in an Object element, counts against recall. Throws
+/// quadrix::Error when `labels` does not hold one label per point or an element names a point
+/// outside the cloud.
+ClassScores score_element_classes(const PointCloud& cloud, const ExtractionResult& extraction,
+                                  const std::vector<std::uint32_t>& labels, const ExtractionOptions& options);
 
 }  // namespace quadrix

@@ -4,7 +4,8 @@
 // fitted type, median centre error on the defined axes <= 0.2 m, on seeds 1-10. The monument
 // (TLS) is in test_monument_modelling.cpp. KITTI: about 100 key elements, ground, facades as
 // vertical planes, poles as upright lines. Bad input: a valid tiny model and a status saying why.
-// A mesh picture renders where the camera looks.
+// A mesh picture renders where the camera looks. Class scores (per point, against labels) count
+// every point once, and a labels-mode model agrees with its own labels.
 #include "experiments/reports/model_picture.h"
 #include "experiments/studies/modelling_evaluation.h"
 #include "experiments/synthetic/scanner_simulator.h"
@@ -18,7 +19,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <random>
@@ -132,6 +135,136 @@ TEST(ModellingAcceptance, BadInputGivesATinyValidModelAndSaysWhy) {
   ASSERT_EQ(single.model.augmented_begin, 1u);
   EXPECT_EQ(single.model.types[0], QuadricType::Plane);
   EXPECT_NO_THROW(validate_scene_model(single.model));
+}
+
+const ClassScore& score_of(const ClassScores& scores, ElementClass element_class) {
+  for (const ClassScore& score : scores.classes)
+    if (score.element_class == element_class) return score;
+  throw Error("no score for class " + element_class_name(element_class));
+}
+
+TEST(ClassScores, CountEveryScoredPointOnceAndSkipUnmappedLabelsAndPointsOutOfRange) {
+  // Points 0-7 lie 5 m from the sensor, point 8 at 100 m (beyond the 80 m range). Labels: road x3,
+  // vegetation x2, pole, unlabelled, person, road.
+  PointCloud cloud;
+  cloud.positions.resize(3, 9);
+  for (int i = 0; i < 8; ++i) cloud.positions.col(i) = Eigen::Vector3f(5.0f, 0.1f * static_cast<float>(i), 0.0f);
+  cloud.positions.col(8) = Eigen::Vector3f(100.0f, 0.0f, 0.0f);
+  const std::vector<std::uint32_t> labels = {40, 40, 40, 70, 70, 80, 0, 30, 40};
+  ExtractionResult extraction;
+  extraction.elements = {{ElementClass::Ground, {0, 1, 3, 8}, QuadricType::Invalid},
+                         {ElementClass::Object, {4}, QuadricType::Invalid},
+                         {ElementClass::Line, {5, 6, 7}, QuadricType::Invalid}};
+  const ExtractionOptions options = extraction_preset("vlp64");
+  const ClassScores scores = score_element_classes(cloud, extraction, labels, options);
+  // Scored: points 0-5 (6 and 7 have no class, 8 is out of range); point 2 is in no element.
+  EXPECT_EQ(scores.scored, 6u);
+  const ClassScore& ground = score_of(scores, ElementClass::Ground);
+  EXPECT_EQ(ground.labelled, 3u);
+  EXPECT_EQ(ground.predicted, 3u);
+  EXPECT_EQ(ground.agreeing, 2u);
+  EXPECT_DOUBLE_EQ(ground.recall, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(ground.precision, 2.0 / 3.0);
+  const ClassScore& vegetation = score_of(scores, ElementClass::Vegetation);
+  EXPECT_EQ(vegetation.labelled, 2u);
+  EXPECT_EQ(vegetation.predicted, 0u);
+  EXPECT_EQ(vegetation.recall, 0.0);
+  EXPECT_EQ(vegetation.precision, 0.0);
+  const ClassScore& line = score_of(scores, ElementClass::Line);
+  EXPECT_EQ(line.labelled, 1u);
+  EXPECT_EQ(line.predicted, 1u);
+  EXPECT_EQ(line.recall, 1.0);
+  EXPECT_EQ(scores.confusion.at(ElementClass::Ground), (std::map<std::string, std::size_t>{{"ground", 2}, {"none", 1}}));
+  EXPECT_EQ(scores.confusion.at(ElementClass::Vegetation), (std::map<std::string, std::size_t>{{"ground", 1}, {"object", 1}}));
+  EXPECT_EQ(scores.confusion.at(ElementClass::Line), (std::map<std::string, std::size_t>{{"line", 1}}));
+  EXPECT_EQ(scores.classes.size(), 6u);
+
+  // One label per point, and elements inside the cloud.
+  EXPECT_THROW(score_element_classes(cloud, extraction, {40, 40}, options), Error);
+  ExtractionResult outside = extraction;
+  outside.elements[1].point_indices.push_back(9);
+  EXPECT_THROW(score_element_classes(cloud, outside, labels, options), Error);
+}
+
+// Every class a labels-mode model predicts is the class of the labels it was built from, so scored
+// against those labels its precision is 1 up to points two elements share.
+void expect_labels_mode_agrees_with_its_labels(const PointCloud& cloud, const std::vector<std::uint32_t>& labels,
+                                               const std::string& name) {
+  ExtractionOptions options = extraction_preset("vlp64");
+  options.semantic_mode = SemanticMode::Labels;
+  const ModellingResult labelled = model_scene(cloud, options, ModellingOptions(), labels);
+  ASSERT_EQ(labelled.status, ModellingStatus::Ok) << labelled.message;
+  const ClassScores scores = score_element_classes(cloud, labelled.extraction, labels, options);
+  ASSERT_GT(scores.scored, cloud.size() / 2);
+  for (const ClassScore& score : scores.classes) {
+    std::cout << name << " labels mode, " << element_class_name(score.element_class) << ": recall " << score.recall
+              << ", precision " << score.precision << " (" << score.labelled << " labelled)\n";
+    if (score.predicted > 0) EXPECT_GE(score.precision, 0.99) << element_class_name(score.element_class);
+  }
+}
+
+TEST(ClassScores, LabelsModeAgreesWithItsOwnLabelsAndGeometryFindsTheGround) {
+  const Scene scene = make_street_scene(3);
+  const RayCaster caster(scene);
+  const SimulatedScan scan = simulate_scan(scene, caster, sensor_preset("hdl64"), scene.default_lidar_poses[0], 3, 0);
+  ASSERT_EQ(scan.cloud.labels.size(), scan.cloud.size());
+  expect_labels_mode_agrees_with_its_labels(scan.cloud, scan.cloud.labels, "street seed 3");
+  // Geometry only: the simulated street's ground is flat and bare, so nearly all of it is the ground element.
+  const ExtractionOptions options = extraction_preset("vlp64");
+  const ModellingResult geometric = model_scene(scan.cloud, options, ModellingOptions());
+  const ClassScore& ground = score_of(score_element_classes(scan.cloud, geometric.extraction, scan.cloud.labels, options),
+                                      ElementClass::Ground);
+  std::cout << "street seed 3 geometry only, ground: recall " << ground.recall << ", precision " << ground.precision << "\n";
+  EXPECT_GE(ground.recall, 0.9);
+  EXPECT_GE(ground.precision, 0.9);
+}
+
+TEST(ClassScores, LabelsModeAgreesWithItsOwnLabelsOnLabelledKittiFrames) {
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/labels/000052.label");
+  for (const char* frame : {"000052", "000088"}) {
+    SCOPED_TRACE(frame);
+    const PointCloud cloud = read_point_cloud(testing::shared_data_path(std::string("kitti00/velodyne/") + frame + ".bin"));
+    const std::vector<std::uint32_t> labels =
+        read_semantic_kitti_labels(testing::shared_data_path(std::string("kitti00/labels/") + frame + ".label"), cloud.size());
+    expect_labels_mode_agrees_with_its_labels(cloud, labels, std::string("KITTI ") + frame);
+  }
+}
+
+TEST(ClassScores, ModelCommandPrintsAndWritesThemAndRefusesAWrongLabelFile) {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "quadrix_class_scores_test";
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  const Scene scene = make_street_scene(4);
+  const SimulatedScan scan = simulate_scan(scene, RayCaster(scene), sensor_preset("hdl64"), scene.default_lidar_poses[0], 4, 0);
+  PointCloud positions_only;
+  positions_only.positions = scan.cloud.positions;
+  write_point_cloud((folder / "scan.ply").string(), positions_only);
+  {
+    std::ofstream label_file(folder / "scan.label", std::ios::binary);
+    label_file.write(reinterpret_cast<const char*>(scan.cloud.labels.data()),
+                     static_cast<std::streamsize>(scan.cloud.labels.size() * sizeof(std::uint32_t)));
+    std::ofstream short_file(folder / "short.label", std::ios::binary);
+    short_file.write(reinterpret_cast<const char*>(scan.cloud.labels.data()), 40);
+  }
+  const std::string model = std::string(QUADRIX_EXECUTABLE) + " model '" + (folder / "scan.ply").string() + "' --no-page --score-labels '";
+  ASSERT_EQ(std::system((model + (folder / "scan.label").string() + "' --out '" + (folder / "model.json").string() + "' > '" +
+                         (folder / "log.txt").string() + "' 2>&1").c_str()), 0);
+  std::ifstream log_file(folder / "log.txt");
+  const std::string log((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(log.find("vegetation"), std::string::npos) << log;
+  EXPECT_NE(log.find("labelled points went to"), std::string::npos) << log;
+  std::ifstream json_file(folder / "model.json");
+  const std::string json((std::istreambuf_iterator<char>(json_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"class_scores\": {\"scored\": "), std::string::npos);
+  EXPECT_NE(json.find("\"ground\": {\"labelled\": "), std::string::npos);
+  // A label file of the wrong length fails before modelling, names the file and writes no model.
+  EXPECT_NE(std::system((model + (folder / "short.label").string() + "' --out '" + (folder / "bad.json").string() + "' > '" +
+                         (folder / "bad.txt").string() + "' 2>&1").c_str()), 0);
+  std::ifstream bad_file(folder / "bad.txt");
+  const std::string bad((std::istreambuf_iterator<char>(bad_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(bad.find("short.label"), std::string::npos) << bad;
+  EXPECT_FALSE(std::filesystem::exists(folder / "bad.json"));
+  std::filesystem::remove_all(folder);
 }
 
 TEST(ModelPicture, RendersAMeshWhereTheCameraLooks) {
