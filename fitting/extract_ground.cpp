@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
 
 namespace quadrix {
 namespace {
@@ -119,9 +118,13 @@ bool fit_patch_plane(Patch& patch, const Eigen::Matrix3Xd& local, const GroundOp
   return true;
 }
 
-// Region growing over candidate patches from the best-supported one (TRAVEL's traversable graph):
-// neighbours are patches whose centroids are close horizontally, and both planes must agree in
-// height at their midpoint and in slope. Marks the reached patches accepted.
+// Region growing over candidate patches (TRAVEL's traversable graph): neighbours are patches whose
+// centroids are close horizontally, and both planes must agree in height at their midpoint and in
+// slope. Every connected region is grown, and the one holding the most inlier points is the ground:
+// its patches are marked accepted. Growing only from the best-supported patch let one tilted patch
+// with many points (a car's flank, a bank, up to max_slope_deg off up) be the whole ground when no
+// neighbour continued it; which patch leads depends on where the sectors fall, so the ground then
+// changed with the scan's heading (docs/modelling.md, "Ground").
 void grow_ground_region(std::vector<Patch>& patches, const GroundOptions& options) {
   std::vector<int> candidate_patches;
   for (int index = 0; index < static_cast<int>(patches.size()); ++index)
@@ -137,21 +140,33 @@ void grow_ground_region(std::vector<Patch>& patches, const GroundOptions& option
     const double step = std::abs(plane_height(a, middle.x(), middle.y()) - plane_height(b, middle.x(), middle.y()));
     return step <= options.max_step_height && a.normal.dot(b.normal) >= cos_neighbour;
   };
-  const int seed = *std::max_element(candidate_patches.begin(), candidate_patches.end(), [&](int a, int b) {
-    return patches[a].inliers.size() < patches[b].inliers.size();
-  });
-  std::queue<int> queue;
-  patches[seed].accepted = true;
-  queue.push(seed);
-  while (!queue.empty()) {
-    const int current = queue.front();
-    queue.pop();
-    for (const int other : candidate_patches) {
-      if (patches[other].accepted || !is_neighbour(patches[current], patches[other])) continue;
-      patches[other].accepted = true;
-      queue.push(other);
+  // Seeds in order of support, so that of two regions equally large the one holding the
+  // best-supported patch wins.
+  std::stable_sort(candidate_patches.begin(), candidate_patches.end(),
+                   [&](int a, int b) { return patches[a].inliers.size() > patches[b].inliers.size(); });
+  std::vector<int> region_of(patches.size(), -1);
+  std::vector<int> best_region;
+  std::size_t best_points = 0;
+  for (const int seed : candidate_patches) {
+    if (region_of[seed] >= 0) continue;
+    std::vector<int> region = {seed};
+    std::size_t points = 0;
+    region_of[seed] = seed;
+    for (std::size_t next = 0; next < region.size(); ++next) {
+      const int current = region[next];
+      points += patches[current].inliers.size();
+      for (const int other : candidate_patches) {
+        if (region_of[other] >= 0 || !is_neighbour(patches[current], patches[other])) continue;
+        region_of[other] = seed;
+        region.push_back(other);
+      }
+    }
+    if (points > best_points) {
+      best_points = points;
+      best_region = std::move(region);
     }
   }
+  for (const int index : best_region) patches[index].accepted = true;
 }
 
 }  // namespace

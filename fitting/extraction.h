@@ -49,8 +49,8 @@ std::string extraction_status_name(ExtractionStatus status);
 /// Ground segmentation (replaces the paper's TRAVEL): a concentric-zone patch model like
 /// Patchwork. The plane around the sensor is split into rings x sectors; in each patch a plane is
 /// fitted by PCA to its lowest points and refined on its inliers; patches whose plane is upright,
-/// flat and continuous (in height and slope) with an accepted neighbour are grown outwards from the
-/// best-supported patch. Handles slopes (each patch has its own plane) and kerbs (a kerb breaks
+/// flat and continuous (in height and slope) with a neighbour form regions, and the region holding the
+/// most ground points is the ground. Handles slopes (each patch has its own plane) and kerbs (a kerb breaks
 /// height continuity only by its own height, below `max_step_height`).
 struct GroundOptions {
   std::vector<double> ring_edges = {0.0, 4.0, 8.0, 12.0, 16.0, 22.0, 30.0, 40.0, 55.0, 80.0, 200.0};  ///< ring radii around the sensor, m

@@ -199,7 +199,9 @@ void expect_labels_mode_agrees_with_its_labels(const PointCloud& cloud, const st
   for (const ClassScore& score : scores.classes) {
     std::cout << name << " labels mode, " << element_class_name(score.element_class) << ": recall " << score.recall
               << ", precision " << score.precision << " (" << score.labelled << " labelled)\n";
-    if (score.predicted > 0) EXPECT_GE(score.precision, 0.99) << element_class_name(score.element_class);
+    if (score.predicted > 0) {
+      EXPECT_GE(score.precision, 0.99) << element_class_name(score.element_class);
+    }
   }
 }
 

@@ -5,11 +5,14 @@
 
 #include "geometry/constants.h"
 #include "geometry/error.h"
+#include "geometry/io.h"
+#include "test_data.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -509,6 +512,56 @@ TEST(Extraction, UpAxisIsConfigurable) {
   EXPECT_LT(std::acos(std::min(1.0, result.ground_normal.dot(true_normal))) * 180.0 / kPi, 2.0);
   EXPECT_EQ(count_class(result, ElementClass::Plane), 2);
   EXPECT_EQ(count_class(result, ElementClass::Line), 3);
+}
+
+TEST(Extraction, GroundIsTheLargestContinuousRegionNotTheRegionOfTheDensestPatch) {
+  // A flat ground 1.73 m below the sensor, 6 points per m^2 out to 40 m, and one dense bank tilted
+  // 20 deg (below the 25 deg a patch may slope) filling one sector of the 4-8 m ring: its patch holds
+  // the most inliers, but no neighbour continues its slope. The ground is the flat region.
+  std::mt19937_64 engine(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Eigen::Vector3d> points;
+  const double bank_first = 1.0 * kPi / 180.0, bank_last = 10.0 * kPi / 180.0;
+  std::size_t flat = 0;
+  for (int i = 0; i < 30000; ++i) {
+    const double radius = std::sqrt(4.0 + unit(engine) * (1600.0 - 4.0)), azimuth = 2.0 * kPi * unit(engine);
+    if (radius >= 4.0 && radius <= 8.0 && azimuth >= bank_first - 0.2 && azimuth <= bank_last + 0.2) continue;
+    points.emplace_back(radius * std::cos(azimuth), radius * std::sin(azimuth), -1.73);
+    ++flat;
+  }
+  for (int i = 0; i < 3000; ++i) {
+    const double radius = 4.5 + 3.0 * unit(engine), azimuth = bank_first + (bank_last - bank_first) * unit(engine);
+    points.emplace_back(radius * std::cos(azimuth), radius * std::sin(azimuth), -1.73 + std::tan(20.0 * kPi / 180.0) * (radius - 4.5));
+  }
+  const GroundSegmentation ground = segment_ground(to_matrix(points), all_indices(points.size()), GroundOptions(),
+                                                   Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ());
+  ASSERT_TRUE(ground.found);
+  EXPECT_LT(std::acos(std::min(1.0, ground.normal.z())) * 180.0 / kPi, 1.0);
+  EXPECT_NEAR(ground.offset, 1.73, 0.02);
+  EXPECT_GE(ground.ground_indices.size(), flat * 9 / 10);
+  EXPECT_GT(ground.patches_accepted, 100);
+}
+
+TEST(Extraction, GroundOfARealScanDoesNotDependOnItsHeading) {
+  // One KITTI sweep turned about the up axis: the sectors fall elsewhere on the street, and the
+  // ground plane found must turn with the sweep and keep its height.
+  const std::string path = testing::shared_data_path("kitti00/velodyne/000088.bin");
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data absent: " << path;
+  const PointCloud cloud = read_point_cloud(path);
+  const ExtractionOptions options = extraction_preset("vlp64");
+  const ExtractionResult unturned = extract_elements(cloud, options);
+  ASSERT_TRUE(unturned.has_ground);
+  for (const double yaw : {45.0, 90.0, 135.0, -135.8, 180.0, -60.0}) {
+    SCOPED_TRACE("yaw " + std::to_string(yaw));
+    const Eigen::Matrix3f turn = Eigen::AngleAxisf(static_cast<float>(yaw * kPi / 180.0), Eigen::Vector3f::UnitZ()).toRotationMatrix();
+    PointCloud turned = cloud;
+    turned.positions = turn * cloud.positions;
+    const ExtractionResult result = extract_elements(turned, options);
+    ASSERT_TRUE(result.has_ground);
+    const Eigen::Vector3d expected = turn.cast<double>() * unturned.ground_normal;
+    EXPECT_LT(std::acos(std::min(1.0, result.ground_normal.dot(expected))) * 180.0 / kPi, 1.0);
+    EXPECT_NEAR(result.ground_offset, unturned.ground_offset, 0.05);
+  }
 }
 
 TEST(Extraction, DegenerateCloudsGiveAStatusNotACrash) {
