@@ -2,6 +2,7 @@
 // over seeds), degenerate input as a status, and the real KITTI pairs of ../shared/data/pairs.tsv
 // (the paper's demo pair 000000 -> 004438 must meet the paper's success rule).
 #include "estimation/registration.h"
+#include "geometry/constants.h"
 #include "geometry/io.h"
 #include "test_data.h"
 
@@ -543,6 +544,40 @@ TEST(RegisterCloudsRealData, KittiPairsOfPairsTsvSucceedAndAreOk) {
   EXPECT_TRUE(confident_and_wrong.empty()) << "ok and wrong:" << confident_and_wrong;
   EXPECT_TRUE(failures.empty()) << "failed:" << failures;
   EXPECT_TRUE(not_ok.empty()) << "not ok:" << not_ok;
+}
+
+// The pair 29.9 m apart in both directions with the source turned about the up axis: the heading
+// must not matter (the ground each scan is levelled by, and the correlation over it, turn with the
+// scan). Each turn must succeed, and none may be `ok` and wrong.
+TEST(RegisterCloudsRealData, ThePairThirtyMetresApartSucceedsAtAnyHeading) {
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/000052.bin");
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/000088.bin");
+  const PointCloud frame_52 = read_point_cloud(testing::shared_data_path("kitti00/velodyne/000052.bin"));
+  const PointCloud frame_88 = read_point_cloud(testing::shared_data_path("kitti00/velodyne/000088.bin"));
+  const Eigen::Isometry3d to_88_from_52 = read_pose_matrix(testing::shared_data_path("kitti00/gt/T_000088_from_000052.txt"));
+  struct Direction {
+    const PointCloud* source;
+    const PointCloud* target;
+    Eigen::Isometry3d truth;
+    const char* name;
+  };
+  for (const Direction& direction : {Direction{&frame_52, &frame_88, to_88_from_52, "52 -> 88"},
+                                     Direction{&frame_88, &frame_52, to_88_from_52.inverse(), "88 -> 52"}}) {
+    for (const double yaw : {-150.0, -90.0, 60.0, 135.0}) {
+      SCOPED_TRACE(std::string(direction.name) + ", source turned " + std::to_string(yaw) + " deg");
+      const Eigen::Isometry3d turn(Eigen::AngleAxisd(yaw * kPi / 180.0, Eigen::Vector3d::UnitZ()));
+      PointCloud turned = *direction.source;
+      turned.positions = turn.cast<float>().linear() * direction.source->positions;
+      const Eigen::Isometry3d truth = direction.truth * turn.inverse();
+      const RegistrationResult result = register_clouds(turned, *direction.target);
+      const bool success = registration_succeeded(result.transform, truth);
+      std::printf("%s, turned %6.1f deg: %s, RTE %.2f m, RRE %.2f deg\n", direction.name, yaw,
+                  registration_status_name(result.status), translation_error(result.transform, truth),
+                  rotation_error_degrees(result.transform, truth));
+      EXPECT_TRUE(success) << result.message;
+      EXPECT_FALSE(result.status == RegistrationStatus::Ok && !success);
+    }
+  }
 }
 
 }  // namespace
