@@ -99,7 +99,8 @@ train-fitter: configure
 # Regenerates papers/quadricsreg/ (results/ and the page README.md) from a clean build: `quadrix bench`
 # on every pair of $(DATA_DIR)/pairs.tsv with every method, the six KITTI loop closures under random yaw
 # (--yaw-range 180 --trials 10), one run per row of the paper's ablation table, the synthetic
-# loop-closure validation set and the labelled KITTI pair with and without classes, then `quadrix paper`.
+# loop-closure validation set, the shared KITTI frames paired 20-50 m apart under random yaw, and the
+# labelled KITTI pair with and without classes, then `quadrix paper`.
 # Several CPU-minutes on 2 cores.
 DATA_DIR ?= ../shared/data
 PAPER_DIR = papers/quadricsreg
@@ -112,6 +113,9 @@ ABLATION_TRIALS ?= 3
 # The synthetic loop-closure validation set (docs/benchmark.md), generated into the build tree, and
 # the one real pair that has labels on both sides, both run without and with the given classes.
 LOOP_CLOSURE_SET = $(BUILD_DIR)/loop_closures/validation
+# The shared KITTI-00 frames as a KITTI layout (links, no copies), so `quadrix bench --kitti` can pair
+# every two of them 20-50 m apart with the ground truth of the shared poses.
+KITTI_LAYOUT = $(BUILD_DIR)/kitti_layout
 LABELLED_PAIRS = $(BUILD_DIR)/loop_closures/labelled_pairs.tsv
 PAPER_ABLATIONS = default no-semantics no-central no-linear-center no-planar-center no-augmented-points \
   ke30 ke40 ke60 ks15 ks25 dm-0.2 dm-0.8 dm-0.2-0.8 dm-0.2-0.6-0.8 dm-0.2-0.4-0.6-0.8-1.0 \
@@ -127,6 +131,13 @@ papers: build
 	    --yaw-range 180 --trials $(ABLATION_TRIALS) --seed 2 --jobs $(JOBS) --no-progress --ablation $$ablation \
 	    --title "Ablation $$ablation: KITTI-00 loop closures, random yaw" --out $(PAPER_DIR)/results/ablation-$$ablation || exit 1; \
 	done
+	mkdir -p $(KITTI_LAYOUT)/sequences/00 $(KITTI_LAYOUT)/poses
+	ln -sfn $(abspath $(DATA_DIR))/kitti00/velodyne $(KITTI_LAYOUT)/sequences/00/velodyne
+	ln -sfn $(abspath $(DATA_DIR))/kitti_poses/00.txt $(KITTI_LAYOUT)/poses/00.txt
+	$(BUILD_DIR)/bin/quadrix bench --kitti $(KITTI_LAYOUT) --seq 00 --calib $(DATA_DIR)/kitti_poses/calib_Tr_velo_to_cam.txt \
+	  --mode lc --t-lc 0 --bins 20-30,30-40,40-50 --method quadrix --yaw-range 180 --trials $(PAPER_TRIALS) --seed 5 \
+	  --jobs $(JOBS) --no-progress --title "KITTI-00 pairs 20-50 m apart (every pair of the shared frames), random yaw" \
+	  --out $(PAPER_DIR)/results/kitti-far-yaw180
 	$(BUILD_DIR)/bin/quadrix synth loop-closures --seed 2001 --streets 5 --pairs-per-bin 20 --out $(LOOP_CLOSURE_SET)
 	$(BUILD_DIR)/bin/quadrix bench --pairs $(LOOP_CLOSURE_SET)/pairs.tsv --method quadrix --yaw-range 180 --seed 3 \
 	  --jobs $(JOBS) --no-progress --title "Synthetic loop closures (validation set, seeds 2001-2005), random yaw, no labels" \
