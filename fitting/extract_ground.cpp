@@ -124,7 +124,7 @@ bool fit_patch_plane(Patch& patch, const Eigen::Matrix3Xd& local, const GroundOp
 // its patches are marked accepted. Growing only from the best-supported patch let one tilted patch
 // with many points (a car's flank, a bank, up to max_slope_deg off up) be the whole ground when no
 // neighbour continued it; which patch leads depends on where the sectors fall, so the ground then
-// changed with the scan's heading (docs/modelling.md, "Ground").
+// changed with the scan's heading (docs/modelling.md, "The ground's region").
 void grow_ground_region(std::vector<Patch>& patches, const GroundOptions& options) {
   std::vector<int> candidate_patches;
   for (int index = 0; index < static_cast<int>(patches.size()); ++index)
