@@ -362,6 +362,10 @@ void validate_dense_search_options(const DenseSearchOptions& options) {
   if (!(options.range >= 0.0)) fail("range", "non-negative", options.range);
   if (!(options.across_step > 0.0)) fail("across_step", "positive", options.across_step);
   if (!(options.across_range >= 0.0)) fail("across_range", "non-negative", options.across_range);
+  if (!(options.step_with_correlation > 0.0)) fail("step_with_correlation", "positive", options.step_with_correlation);
+  if (!(options.range_with_correlation >= 0.0)) fail("range_with_correlation", "non-negative", options.range_with_correlation);
+  if (!(options.across_range_with_correlation >= 0.0))
+    fail("across_range_with_correlation", "non-negative", options.across_range_with_correlation);
   if (!(options.refine_band >= 0.0)) fail("refine_band", "non-negative", options.refine_band);
   if (options.max_refined < 1) fail("max_refined", "at least 1", static_cast<double>(options.max_refined));
   if (!(options.decisive_margin >= 0.0)) fail("decisive_margin", "non-negative", options.decisive_margin);

@@ -34,6 +34,9 @@ struct DenseSearchOptions {
   double range = 8.0;                    ///< the starts reach this far either side of the answer along it, m
   double across_step = 2.5;              ///< spacing of the starts across the weakest direction (along the ground), m
   double across_range = 5.0;             ///< the starts reach this far either side of the answer across it, m
+  double range_with_correlation = 4.0;   ///< when the correlation over the ground handed the search its poses, the starts reach only this far along the weakest direction, m (its poses reach the rest of the street)
+  double step_with_correlation = 2.0;    ///< ... spaced this far apart, m
+  double across_range_with_correlation = 0.0;  ///< ... and this far across it, m
   double refine_band = 0.1;              ///< optima whose first-pass overlap is within this of the best are refined on all samples
   std::size_t max_refined = 12;          ///< at most this many (the best first); more in the band leaves the search unsettled
   double minimum_overlap = 0.4;          ///< and put at least this fraction of the source on the target (wrong settles measured 0.23-0.33, right ones 0.44-0.79)
@@ -42,8 +45,9 @@ struct DenseSearchOptions {
 };
 
 /// Throws quadrix::Error naming the first option out of range (e.g. "option 'dense_search.voxel_size'
-/// must be positive, got 0"): voxel_size, correspondence_distance, step and across_step positive,
-/// range, across_range, refine_band and decisive_margin not negative, minimum_overlap in [0, 1],
+/// must be positive, got 0"): voxel_size, correspondence_distance, step, across_step and
+/// step_with_correlation positive, range, across_range, range_with_correlation,
+/// across_range_with_correlation, refine_band and decisive_margin not negative, minimum_overlap in [0, 1],
 /// max_refined at least 1, normal_neighbours at least 3, source_samples at least 6; then the
 /// correlation's options (validate_ground_correlation_options).
 void validate_dense_search_options(const DenseSearchOptions& options);

@@ -91,7 +91,8 @@ bool registration_succeeded(const Eigen::Isometry3d& estimate, const Eigen::Isom
 RegistrationStatus decide_registration_status(const RegistrationFindings& findings) {
   if (findings.estimation_failure) return *findings.estimation_failure;
   const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
-  const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little && !findings.half_turn_rival;
+  const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little && !findings.half_turn_rival &&
+                    !findings.overlap_unconfirmed;
   return sure && fits ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
 }
 
@@ -403,6 +404,10 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
     // The floor: a wrong answer that happens to score well among the quadrics rarely puts much of
     // the source on the target (AmbiguityOptions::minimum_overlap; docs/registration.md says how it was set).
     result.findings.overlaps_too_little = overlap.sampled > 0 && overlap.transformed < options.minimum_overlap;
+    // Between the floor and confirm_below right and wrong answers meet: such an answer waits for the
+    // dense search (verify_registration), unless that search has just settled it.
+    result.findings.overlap_unconfirmed =
+        !result.findings.settled_by_dense_search && overlap.sampled > 0 && overlap.transformed < options.confirm_below;
     if (was_ok && result.findings.fits_worse_than_identity) {
       std::ostringstream why;
       why.precision(2);
@@ -414,6 +419,12 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
       why.precision(2);
       why << "; but only " << overlap.transformed << " of the source lands within " << overlap.distance
           << " m of the target, below the floor of " << options.minimum_overlap;
+      result.message += why.str();
+    } else if (was_ok && result.findings.overlap_unconfirmed) {
+      std::ostringstream why;
+      why.precision(2);
+      why << "; " << overlap.transformed << " of the source lands within " << overlap.distance << " m of the target, below "
+          << options.confirm_below << ": the dense search must confirm it";
       result.message += why.str();
     }
     // Only an `ok` answer is demoted here; any other status stands as it is.
@@ -561,9 +572,17 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
   for (const GroundPose& pose : result.ground_correlation) global_starts.push_back(pose.transform);
   std::optional<Eigen::Vector3d> up;
   if (result.target_model.has_ground) up = result.target_model.ground_normal;
+  // With the correlation's poses the grid only has to cover the quadric answer's neighbourhood: the
+  // poses reach the rest of the street (DenseSearchOptions::range_with_correlation).
+  DenseSearchOptions search_options = options.dense_search;
+  if (!global_starts.empty()) {
+    search_options.range = search_options.range_with_correlation;
+    search_options.step = search_options.step_with_correlation;
+    search_options.across_range = search_options.across_range_with_correlation;
+  }
   const DenseSearchResult search = search_weakest_direction(
       source, target, result.transform, other_starts, global_starts, up, ground_of(result.source_model),
-      options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
+      options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, search_options);
   const bool settled = dense_search_settles(search, options.dense_search);
   result.message += describe_dense_search(search, result, settled, options.dense_search);
   result.dense_search = search;
@@ -579,6 +598,7 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
   result.transform = search.optima[search.best].transform;
   result.findings.fits_worse_than_identity = false;  // measured again on the new answer below
   result.findings.overlaps_too_little = false;
+  result.findings.overlap_unconfirmed = false;
   result.findings.half_turn_rival = false;
   decide(result);
 }

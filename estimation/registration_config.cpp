@@ -149,6 +149,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_clique_for_ok>("ambiguity.minimum_clique_for_ok", "a winner supported by a smaller clique is ambiguous, correspondences"),
       shared_key<&R::ambiguity, &AmbiguityOptions::overlap_margin>("ambiguity.overlap_margin", "an ok answer overlapping less than the unmoved source by more than this is ambiguous, fraction (0: it must beat not moving; negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_overlap>("ambiguity.minimum_overlap", "an ok answer landing less than this fraction of the source within 0.3 m of the target is ambiguous, fraction (0: no floor)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::confirm_below>("ambiguity.confirm_below", "an ok answer landing less than this fraction of the source is ok only once the dense search settles it, fraction (0: off)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_margin>("ambiguity.half_turn_margin", "an ok answer must out-overlap the best optimum reached from its half turn about the up axis by this, fraction (negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::adopt_icp_optimum>("ambiguity.adopt_icp_optimum", "an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_samples>("ambiguity.half_turn_samples", "source points the half-turn check's ICP aligns, points (>= 6)"),
@@ -166,6 +167,9 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::dense_search, &DenseSearchOptions::range>("dense_search.range", "the starts reach this far either side of the answer along it, m (>= 0)"),
       shared_key<&R::dense_search, &DenseSearchOptions::across_step>("dense_search.across_step", "spacing of the starts across the weakest direction, m (> 0)"),
       shared_key<&R::dense_search, &DenseSearchOptions::across_range>("dense_search.across_range", "the starts reach this far either side of the answer across it, m (>= 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::range_with_correlation>("dense_search.range_with_correlation", "when the correlation over the ground gave poses, the starts reach only this far along the weakest direction, m (>= 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::step_with_correlation>("dense_search.step_with_correlation", "when the correlation over the ground gave poses, spacing of the starts along the weakest direction, m (> 0)"),
+      shared_key<&R::dense_search, &DenseSearchOptions::across_range_with_correlation>("dense_search.across_range_with_correlation", "when the correlation over the ground gave poses, the starts reach this far either side of the answer across it, m (>= 0)"),
       shared_key<&R::dense_search, &DenseSearchOptions::refine_band>("dense_search.refine_band", "optima within this overlap of the best are refined on all samples, fraction (>= 0)"),
       shared_key<&R::dense_search, &DenseSearchOptions::max_refined>("dense_search.max_refined", "at most this many optima refined, optima (>= 1)"),
       shared_key<&R::dense_search, &DenseSearchOptions::minimum_overlap>("dense_search.minimum_overlap", "a settled answer puts at least this fraction of the source on the target, fraction (0..1)"),
@@ -422,6 +426,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
       throw Error("ambiguity.half_turn_samples must be at least 6, got " + std::to_string(options.ambiguity.half_turn_samples));
     if (!(options.ambiguity.minimum_overlap >= 0.0 && options.ambiguity.minimum_overlap <= 1.0))
       throw Error("ambiguity.minimum_overlap must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.minimum_overlap));
+    if (!(options.ambiguity.confirm_below >= 0.0 && options.ambiguity.confirm_below <= 1.0))
+      throw Error("ambiguity.confirm_below must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.confirm_below));
   } catch (const Error& error) {
     throw file_error(path, error.what());
   }

@@ -381,6 +381,15 @@ TEST(DenseSearch, OptionsOutOfRangeAreNamed) {
   options.normal_neighbours = 2;
   EXPECT_NE(message(options).find("'dense_search.normal_neighbours' must be at least 3"), std::string::npos) << message(options);
   options = DenseSearchOptions{};
+  options.step_with_correlation = 0.0;
+  EXPECT_NE(message(options).find("'dense_search.step_with_correlation' must be positive"), std::string::npos) << message(options);
+  options = DenseSearchOptions{};
+  options.range_with_correlation = -1.0;
+  EXPECT_NE(message(options).find("'dense_search.range_with_correlation'"), std::string::npos) << message(options);
+  options = DenseSearchOptions{};
+  options.across_range_with_correlation = -1.0;
+  EXPECT_NE(message(options).find("'dense_search.across_range_with_correlation'"), std::string::npos) << message(options);
+  options = DenseSearchOptions{};
   options.voxel_size = -0.1;
   PointCloud cloud;
   cloud.positions = Eigen::Matrix3Xf::Random(3, 100);

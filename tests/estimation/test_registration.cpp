@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -183,6 +184,8 @@ TEST(DecideRegistrationStatus, OkOnlyWhenSureAndFittingAtLeastAsWellAsNotMoving)
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.weak_support = true; }), RegistrationStatus::Ambiguous);
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.fits_worse_than_identity = true; }), RegistrationStatus::Ambiguous);
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.overlaps_too_little = true; }), RegistrationStatus::Ambiguous);
+  // Below confirm_below an answer waits for the dense search.
+  EXPECT_EQ(status_of([](RegistrationFindings& f) { f.overlap_unconfirmed = true; }), RegistrationStatus::Ambiguous);
   EXPECT_EQ(status_of([](RegistrationFindings& f) {
               f.settled_by_dense_search = true;
               f.overlaps_too_little = true;
@@ -576,6 +579,15 @@ TEST(RegisterCloudsRealData, ThePairThirtyMetresApartSucceedsAtAnyHeading) {
                   rotation_error_degrees(result.transform, truth));
       EXPECT_TRUE(success) << result.message;
       EXPECT_FALSE(result.status == RegistrationStatus::Ok && !success);
+      // Where the correlation over the ground gave poses, the dense search's grid shrinks to
+      // range_with_correlation along the weakest direction, step_with_correlation apart.
+      if (result.dense_search && !result.ground_correlation.empty()) {
+        const DenseSearchOptions& dense = RegistrationOptions().dense_search;
+        const std::size_t grid = static_cast<std::size_t>(
+            std::count_if(result.dense_search->optima.begin(), result.dense_search->optima.end(),
+                          [](const DenseOptimum& optimum) { return optimum.start.rfind("answer", 0) == 0; }));
+        EXPECT_EQ(grid, 2 * static_cast<std::size_t>(dense.range_with_correlation / dense.step_with_correlation + 1e-9) + 1);
+      }
     }
   }
 }

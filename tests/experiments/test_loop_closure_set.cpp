@@ -170,5 +170,42 @@ TEST(LoopClosureSet, TheTuningSetsFormerMirrorPairIsRightAndItsMirrorAnswerIsNot
   }
 }
 
+// An `ok` answer 25 m wrong that the floor let through, found on the validation set (street 2004,
+// pass-2 scan 26 against pass-1 scan 15, 25 m apart) under another draw of yaws than the one the
+// set is reported with (`--yaw-range 180 --seed 3` on its 20-30 m rows alone turned the source by
+// 119.22 degrees). The quadric answer lands 0.51 of the source on the target (the truth 0.63),
+// above the floor, and its half turn fits worse, so only AmbiguityOptions::confirm_below sends it to
+// the dense search, whose correlation over the ground starts at the truth. The ratio of the two
+// best candidate scores, 0.8501, sits at the edge of score_ratio (0.85): the bench's rotation put
+// it on the `ok` side, so this test moves score_ratio to 0.851 to do the same.
+TEST(LoopClosureSet, AnOkAnswerLandingLittleOfTheSourceIsConfirmedByTheDenseSearch) {
+  const std::uint64_t seed = 2004;
+  const StreetPass first = make_street_pass(seed, 1, 3.0);
+  const StreetPass second = make_street_pass(seed, 2, 3.0);
+  const SensorModel sensor = sensor_preset("hdl64");
+  const SyntheticRun first_run = run_synthetic(first.scene, sensor, first.poses, seed * 2 + 1);
+  const SyntheticRun second_run = run_synthetic(second.scene, sensor, second.poses, seed * 2 + 2);
+  const Eigen::Isometry3d turn(Eigen::AngleAxisd(119.22322349171716 * kPi / 180.0, Eigen::Vector3d::UnitZ()));
+  PointCloud source = second_run.scans[26].cloud;
+  source.positions = (turn.linear() * source.positions.cast<double>()).cast<float>().eval();
+  const PointCloud& target = first_run.scans[15].cloud;
+  const Eigen::Isometry3d truth = relative_transform(first.poses[15], second.poses[26]) * turn.inverse();
+  RegistrationOptions options = resolve_registration_options("auto", source, "auto", target);
+  options.ambiguity.score_ratio = 0.851;
+  for (const double confirm_below : {options.ambiguity.confirm_below, 0.0}) {
+    RegistrationOptions tried = options;
+    tried.ambiguity.confirm_below = confirm_below;
+    const RegistrationResult result = register_clouds(source, target, tried);
+    const bool right = registration_succeeded(result.transform, truth);
+    if (confirm_below > 0.0) {
+      EXPECT_TRUE(right) << result.message;
+      EXPECT_NE(result.message.find("the dense search must confirm it"), std::string::npos) << result.message;
+      EXPECT_TRUE(result.findings.settled_by_dense_search) << result.message;
+    } else {  // what makes the pair a test: without the rule the answer is `ok` and wrong
+      EXPECT_TRUE(result.status == RegistrationStatus::Ok && !right) << result.message;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace quadrix
