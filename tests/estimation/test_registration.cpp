@@ -269,10 +269,20 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   check_overlap(wrong, source, target, floor_only);
   EXPECT_EQ(wrong.status, RegistrationStatus::Ambiguous);
   EXPECT_NE(wrong.message.find("below the floor of 0.4"), std::string::npos) << wrong.message;
-  // Both checks switched off (negative margin, zero floor), or an answer already not `ok`, stays as it is.
+  // With the margin and the floor off, an answer landing less than confirm_below still waits for
+  // the dense search.
   AmbiguityOptions off;
   off.overlap_margin = -1.0;
   off.minimum_overlap = 0.0;
+  wrong.status = RegistrationStatus::Ok;
+  wrong.message = "candidate of level 0";
+  check_overlap(wrong, source, target, off);
+  EXPECT_EQ(wrong.status, RegistrationStatus::Ambiguous);
+  EXPECT_TRUE(wrong.findings.overlap_unconfirmed);
+  EXPECT_NE(wrong.message.find("the dense search must confirm it"), std::string::npos) << wrong.message;
+  // All three checks switched off (negative margin, zero floor, zero confirm_below), or an answer
+  // already not `ok`, stays as it is.
+  off.confirm_below = 0.0;
   wrong.status = RegistrationStatus::Ok;
   check_overlap(wrong, source, target, off);
   EXPECT_EQ(wrong.status, RegistrationStatus::Ok);

@@ -122,6 +122,29 @@ TEST(LoopClosureSet, PairsLieInTheirBinsWithExactGroundTruth) {
 }
 
 
+// A pair as write_loop_closure_set draws it: street `seed`, its pass-2 scan `source_scan` turned by
+// `yaw_degrees` about the up axis (as `quadrix bench --yaw-range` turns a source) against its pass-1
+// scan `target_scan`, with the ground truth.
+struct TurnedStreetPair {
+  PointCloud source, target;
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+};
+
+TurnedStreetPair turned_street_pair(std::uint64_t seed, std::size_t source_scan, std::size_t target_scan, double yaw_degrees) {
+  const StreetPass first = make_street_pass(seed, 1, 3.0);
+  const StreetPass second = make_street_pass(seed, 2, 3.0);
+  const SensorModel sensor = sensor_preset("hdl64");
+  const SyntheticRun first_run = run_synthetic(first.scene, sensor, first.poses, seed * 2 + 1);
+  const SyntheticRun second_run = run_synthetic(second.scene, sensor, second.poses, seed * 2 + 2);
+  const Eigen::Isometry3d turn(Eigen::AngleAxisd(yaw_degrees * kPi / 180.0, Eigen::Vector3d::UnitZ()));
+  TurnedStreetPair pair;
+  pair.source = second_run.scans[source_scan].cloud;
+  pair.source.positions = (turn.linear() * pair.source.positions.cast<double>()).cast<float>().eval();
+  pair.target = first_run.scans[target_scan].cloud;
+  pair.truth = relative_transform(first.poses[target_scan], second.poses[source_scan]) * turn.inverse();
+  return pair;
+}
+
 // A mirror answer of the synthetic tuning set (street 1002, pass-2 scan 24 against pass-1 scan 0,
 // 23 m apart, the source turned by -30.96 degrees as `quadrix bench --yaw-range 180 --seed 3` turned
 // it). When the ground segmentation still grew the ground from its densest patch, every candidate
@@ -131,17 +154,10 @@ TEST(LoopClosureSet, PairsLieInTheirBinsWithExactGroundTruth) {
 // pipeline answers right, and the mirror answer, measured against the right ground, lands 0.21 of
 // the source on the target: below the floor, so it is not `ok` with or without those starts.
 TEST(LoopClosureSet, TheTuningSetsFormerMirrorPairIsRightAndItsMirrorAnswerIsNotOk) {
-  const std::uint64_t seed = 1002;
-  const StreetPass first = make_street_pass(seed, 1, 3.0);
-  const StreetPass second = make_street_pass(seed, 2, 3.0);
-  const SensorModel sensor = sensor_preset("hdl64");
-  const SyntheticRun first_run = run_synthetic(first.scene, sensor, first.poses, seed * 2 + 1);
-  const SyntheticRun second_run = run_synthetic(second.scene, sensor, second.poses, seed * 2 + 2);
-  const Eigen::Isometry3d turn(Eigen::AngleAxisd(-30.959890334646229 * kPi / 180.0, Eigen::Vector3d::UnitZ()));
-  PointCloud source = second_run.scans[24].cloud;
-  source.positions = (turn.linear().cast<float>() * source.positions).eval();
-  const PointCloud& target = first_run.scans[0].cloud;
-  const Eigen::Isometry3d truth = relative_transform(first.poses[0], second.poses[24]) * turn.inverse();
+  const TurnedStreetPair pair = turned_street_pair(1002, 24, 0, -30.959890334646229);
+  const PointCloud& source = pair.source;
+  const PointCloud& target = pair.target;
+  const Eigen::Isometry3d& truth = pair.truth;
   const RegistrationOptions options = resolve_registration_options("auto", source, "auto", target);
   const RegistrationResult registered = register_clouds(source, target, options);
   EXPECT_TRUE(registration_succeeded(registered.transform, truth)) << registered.message;
@@ -179,17 +195,10 @@ TEST(LoopClosureSet, TheTuningSetsFormerMirrorPairIsRightAndItsMirrorAnswerIsNot
 // best candidate scores, 0.8501, sits at the edge of score_ratio (0.85): the bench's rotation put
 // it on the `ok` side, so this test moves score_ratio to 0.851 to do the same.
 TEST(LoopClosureSet, AnOkAnswerLandingLittleOfTheSourceIsConfirmedByTheDenseSearch) {
-  const std::uint64_t seed = 2004;
-  const StreetPass first = make_street_pass(seed, 1, 3.0);
-  const StreetPass second = make_street_pass(seed, 2, 3.0);
-  const SensorModel sensor = sensor_preset("hdl64");
-  const SyntheticRun first_run = run_synthetic(first.scene, sensor, first.poses, seed * 2 + 1);
-  const SyntheticRun second_run = run_synthetic(second.scene, sensor, second.poses, seed * 2 + 2);
-  const Eigen::Isometry3d turn(Eigen::AngleAxisd(119.22322349171716 * kPi / 180.0, Eigen::Vector3d::UnitZ()));
-  PointCloud source = second_run.scans[26].cloud;
-  source.positions = (turn.linear() * source.positions.cast<double>()).cast<float>().eval();
-  const PointCloud& target = first_run.scans[15].cloud;
-  const Eigen::Isometry3d truth = relative_transform(first.poses[15], second.poses[26]) * turn.inverse();
+  const TurnedStreetPair pair = turned_street_pair(2004, 26, 15, 119.22322349171716);
+  const PointCloud& source = pair.source;
+  const PointCloud& target = pair.target;
+  const Eigen::Isometry3d& truth = pair.truth;
   RegistrationOptions options = resolve_registration_options("auto", source, "auto", target);
   options.ambiguity.score_ratio = 0.851;
   for (const double confirm_below : {options.ambiguity.confirm_below, 0.0}) {
