@@ -232,11 +232,16 @@ NamedStarts lay_out_starts(const Eigen::Isometry3d& answer, const std::vector<Ei
   NamedStarts starts;
   // A grid of starts: fine along the weakest direction, where the quadrics are least sure, and
   // coarse across it (along the ground), so an answer that is also off sideways is still reached.
-  const long reach = static_cast<long>(std::floor(options.range / options.step + 1e-9));
-  const long across_reach = static_cast<long>(std::floor(options.across_range / options.across_step + 1e-9));
+  // With global starts the grid only covers the answer's neighbourhood: they reach the rest.
+  const bool global = !global_starts.empty();
+  const double range = global ? options.range_with_correlation : options.range;
+  const double step = global ? options.step_with_correlation : options.step;
+  const double across_range = global ? options.across_range_with_correlation : options.across_range;
+  const long reach = static_cast<long>(std::floor(range / step + 1e-9));
+  const long across_reach = static_cast<long>(std::floor(across_range / options.across_step + 1e-9));
   for (long j = -across_reach; j <= across_reach; ++j)
     for (long k = -reach; k <= reach; ++k) {
-      const double along_shift = static_cast<double>(k) * options.step, across_shift = static_cast<double>(j) * options.across_step;
+      const double along_shift = static_cast<double>(k) * step, across_shift = static_cast<double>(j) * options.across_step;
       Eigen::Isometry3d start = answer;
       start.pretranslate(along_shift * axes.weakest + across_shift * axes.across);
       starts.transforms.push_back(start);

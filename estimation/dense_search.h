@@ -34,9 +34,9 @@ struct DenseSearchOptions {
   double range = 8.0;                    ///< the starts reach this far either side of the answer along it, m
   double across_step = 2.5;              ///< spacing of the starts across the weakest direction (along the ground), m
   double across_range = 5.0;             ///< the starts reach this far either side of the answer across it, m
-  double range_with_correlation = 4.0;   ///< when the correlation over the ground handed the search its poses, the starts reach only this far along the weakest direction, m (its poses reach the rest of the street)
-  double step_with_correlation = 2.0;    ///< ... spaced this far apart, m
-  double across_range_with_correlation = 0.0;  ///< ... and this far across it, m
+  double range_with_correlation = 4.0;   ///< with global starts (the correlation over the ground's poses), the grid reaches only this far along the weakest direction, m: the poses reach the rest of the street (no status changed on the synthetic sets or pairs.tsv; docs/registration.md)
+  double step_with_correlation = 2.0;    ///< with global starts, spacing of the grid along the weakest direction, m
+  double across_range_with_correlation = 0.0;  ///< with global starts, the grid reaches this far across the weakest direction, m
   double refine_band = 0.1;              ///< optima whose first-pass overlap is within this of the best are refined on all samples
   std::size_t max_refined = 12;          ///< at most this many (the best first); more in the band leaves the search unsettled
   double minimum_overlap = 0.4;          ///< and put at least this fraction of the source on the target (wrong settles measured 0.23-0.33, right ones 0.44-0.79)
@@ -87,7 +87,8 @@ DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& ta
 /// direction of the target's normals at `answer` (orthogonal to `up` when given: motions along the
 /// ground) and by j·across_step (|j·across_step| ≤ across_range) across it, from each of
 /// `other_starts`, from each of `global_starts` (poses of a search over the whole scene, such as
-/// correlate_over_ground's, named "correlation k"), and from the identity; scores every optimum by
+/// correlate_over_ground's, named "correlation k"; when there are any, the grid uses the
+/// *_with_correlation range and step instead), and from the identity; scores every optimum by
 /// measure_overlap (points near `source_ground` skipped) and names the best and its best distinct
 /// rival (farther than `translation_disagreement` m or `rotation_disagreement_degrees` apart).
 /// Throws quadrix::Error for options out of range (validate_dense_search_options).

@@ -572,17 +572,9 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
   for (const GroundPose& pose : result.ground_correlation) global_starts.push_back(pose.transform);
   std::optional<Eigen::Vector3d> up;
   if (result.target_model.has_ground) up = result.target_model.ground_normal;
-  // With the correlation's poses the grid only has to cover the quadric answer's neighbourhood: the
-  // poses reach the rest of the street (DenseSearchOptions::range_with_correlation).
-  DenseSearchOptions search_options = options.dense_search;
-  if (!global_starts.empty()) {
-    search_options.range = search_options.range_with_correlation;
-    search_options.step = search_options.step_with_correlation;
-    search_options.across_range = search_options.across_range_with_correlation;
-  }
   const DenseSearchResult search = search_weakest_direction(
       source, target, result.transform, other_starts, global_starts, up, ground_of(result.source_model),
-      options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, search_options);
+      options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
   const bool settled = dense_search_settles(search, options.dense_search);
   result.message += describe_dense_search(search, result, settled, options.dense_search);
   result.dense_search = search;
