@@ -250,15 +250,14 @@ std::vector<GroundPose> correlate_over_ground(const PointCloud& source, const Po
   // reorders close coarse scores. The truth's rank in a one-pass 1 m correlation (a prototype,
   // docs/registration.md "Correlation over the ground") was first on 88 and within the first 4 on
   // 99 of the tuning set's 100 hard-bin pairs.
-  const auto cells = [&](const LevelledScan& scan, double cell) {
-    return occupied_cells(scan.points, cell);
-  };
   const std::vector<PlanarPose> coarse =
-      coarse_pass(centres_of(cells(levelled_source, options.coarse_cell), options.coarse_cell),
-                  OccupancyGrid(cells(levelled_target, options.coarse_cell), options.coarse_cell), options, 3 * options.poses);
-  const std::vector<Eigen::Vector2d> fine_source = centres_of(cells(levelled_source, options.fine_cell), options.fine_cell);
+      coarse_pass(centres_of(occupied_cells(levelled_source.points, options.coarse_cell), options.coarse_cell),
+                  OccupancyGrid(occupied_cells(levelled_target.points, options.coarse_cell), options.coarse_cell), options,
+                  3 * options.poses);
+  const std::vector<Eigen::Vector2d> fine_source =
+      centres_of(occupied_cells(levelled_source.points, options.fine_cell), options.fine_cell);
   if (fine_source.empty()) return {};
-  const OccupancyGrid fine_target(cells(levelled_target, options.fine_cell), options.fine_cell);
+  const OccupancyGrid fine_target(occupied_cells(levelled_target.points, options.fine_cell), options.fine_cell);
   std::vector<PlanarPose> refined(coarse.size());
   tbb::parallel_for(std::size_t(0), coarse.size(),
                     [&](std::size_t k) { refined[k] = refine(coarse[k], fine_source, fine_target, options); });

@@ -14,6 +14,9 @@
 #include "geometry/io.h"
 #include "geometry/mesh.h"
 
+#include <nlohmann/json.hpp>
+
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -22,7 +25,6 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <sstream>
 
 namespace quadrix::cli {
 namespace {
@@ -159,34 +161,16 @@ PointCloud read_merged_clouds(const ModelCommandOptions& options, const CloudRea
   return merged;
 }
 
-// The model's header fields beside its records in model.json: inputs, preset, fitter, statuses,
-// raw size and the extracted elements per class.
 // The "class_scores" member of the model JSON: per class the counts, recall and precision, and
 // where each labelled class's points went.
 std::string class_scores_json(const ClassScores& scores) {
-  std::ostringstream json;
-  json.precision(4);
-  json << "\"class_scores\": {\"scored\": " << scores.scored << ", \"classes\": {";
-  for (std::size_t i = 0; i < scores.classes.size(); ++i) {
-    const ClassScore& score = scores.classes[i];
-    json << (i ? ", " : "") << "\"" << element_class_name(score.element_class) << "\": {\"labelled\": " << score.labelled
-         << ", \"predicted\": " << score.predicted << ", \"agreeing\": " << score.agreeing << ", \"recall\": " << score.recall
-         << ", \"precision\": " << score.precision << "}";
-  }
-  json << "}, \"confusion\": {";
-  bool first_row = true;
-  for (const auto& [truth, row] : scores.confusion) {
-    json << (first_row ? "" : ", ") << "\"" << element_class_name(truth) << "\": {";
-    bool first = true;
-    for (const auto& [modelled, count] : row) {
-      json << (first ? "" : ", ") << "\"" << modelled << "\": " << count;
-      first = false;
-    }
-    json << "}";
-    first_row = false;
-  }
-  json << "}}";
-  return json.str();
+  nlohmann::json classes = nlohmann::json::object(), confusion = nlohmann::json::object();
+  for (const ClassScore& score : scores.classes)
+    classes[element_class_name(score.element_class)] = {{"labelled", score.labelled}, {"predicted", score.predicted},
+                                                        {"agreeing", score.agreeing}, {"recall", score.recall},
+                                                        {"precision", score.precision}};
+  for (const auto& [truth, row] : scores.confusion) confusion[element_class_name(truth)] = row;
+  return "\"class_scores\": " + nlohmann::json{{"scored", scores.scored}, {"classes", classes}, {"confusion", confusion}}.dump();
 }
 
 // The per-class table of --score-labels: recall and precision, then where each class's points went.
@@ -206,6 +190,8 @@ void print_class_scores(const ClassScores& scores) {
   }
 }
 
+// The model's header fields beside its records in model.json: inputs, preset, fitter, statuses,
+// raw size, the extracted elements per class and, with --score-labels, the class scores.
 std::string model_json_extra(const ModelCommandOptions& options, const ModellingOptions& modelling,
                              const ModellingResult& result, double raw_bytes,
                              const std::map<std::string, int>& element_counts, const std::optional<ClassScores>& scores) {
