@@ -14,6 +14,7 @@ point_class_transfer.py) and 2-80 m from the sensor:
               the mean roughness of the points in the point's voxel (0.5 and 1 m), and
               1 - the largest eigenvalue of the mean n n^T of their normals (0: all parallel)
   column top  the highest point above the ground in the point's 0.5 m column, m
+  intensity   the scan's remission (KITTI's fourth float, 0-1)
 Each is printed as the 10/25/50/75/90th percentiles per class (SemanticKITTI classes mapped as in
 point_class_transfer.py: other, vegetation, trunk, pole incl. traffic sign, vehicle) and for the
 building and fence labels inside "other". Results are recorded in docs/modelling.md ("Classes from
@@ -79,11 +80,11 @@ def main():
         points = scan[:, :3].astype(np.float64)
         distance = np.linalg.norm(points[:, :2], axis=1)
         kept = (distance > 2.0) & (distance < 80.0)
-        points, labels = points[kept], labels[kept]
+        points, labels, intensity = points[kept], labels[kept], scan[kept, 3].astype(np.float64)
         classes, semantic = semantic_kitti_class(labels), labels & 0xFFFF
         height = height_above_ground(points)
         roughness, normals = local_geometry(points)
-        features = {'roughness': roughness, 'column top': column_top(points, height)}
+        features = {'roughness': roughness, 'column top': column_top(points, height), 'intensity': intensity}
         for size in (0.5, 1.0):
             pooled_roughness, scatter, _ = voxel_pooled(points, roughness, normals, size)
             features[f'voxel {size} m roughness'] = pooled_roughness
