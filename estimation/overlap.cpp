@@ -56,6 +56,40 @@ bool TargetCoverage::covers(const Eigen::Vector3d& point) const {
   return false;
 }
 
+PointCloud without_isolated_points(const PointCloud& cloud, double cell) {
+  if (!(cell > 0.0)) throw Error("without_isolated_points: cell must be positive, got " + std::to_string(cell));
+  // Points per occupied cube; a point whose cube holds another is kept without looking further, so
+  // only the lone ones (few on a clean scan) look at their 26 neighbours.
+  std::vector<std::uint64_t> keys(cloud.size(), 0);
+  std::vector<char> finite(cloud.size(), 0);
+  std::unordered_map<std::uint64_t, std::uint32_t> count;
+  count.reserve(cloud.size() / 2 + 1);
+  const auto cube_of = [cell](const Eigen::Vector3d& p) -> Eigen::Vector3i { return (p / cell).array().floor().cast<int>(); };
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d p = cloud.point(i);
+    if (!p.allFinite()) continue;
+    finite[i] = 1;
+    keys[i] = cell_key(cube_of(p));
+    ++count[keys[i]];
+  }
+  std::vector<Eigen::Index> kept;
+  kept.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!finite[i]) continue;
+    bool accompanied = count.at(keys[i]) > 1;
+    const Eigen::Vector3i cube = cube_of(cloud.point(i));
+    for (int dx = -1; dx <= 1 && !accompanied; ++dx)
+      for (int dy = -1; dy <= 1 && !accompanied; ++dy)
+        for (int dz = -1; dz <= 1 && !accompanied; ++dz)
+          accompanied = (dx != 0 || dy != 0 || dz != 0) && count.count(cell_key(cube + Eigen::Vector3i(dx, dy, dz))) > 0;
+    if (accompanied) kept.push_back(static_cast<Eigen::Index>(i));
+  }
+  PointCloud result;
+  result.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i) result.positions.col(static_cast<Eigen::Index>(i)) = cloud.positions.col(kept[i]);
+  return result;
+}
+
 OverlapMeasure measure_overlap(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,
                                const std::optional<Eigen::Vector4d>& source_ground, double distance) {
   if (!(distance > 0.0)) throw Error("measure_overlap: distance must be positive, got " + std::to_string(distance));

@@ -39,6 +39,12 @@ class TargetCoverage {
 /// dense search's thinning share it.
 std::uint64_t cell_key(const Eigen::Vector3i& cell);
 
+/// The finite points of `cloud` that another point keeps company: one lies in the point's cube of
+/// edge `cell` or in one of the 26 around it. A spurious return (rain, dust, a multipath echo, an
+/// injected outlier) stands alone and is left out; a point of a scanned surface has its scan line's
+/// neighbours within that reach. Only positions are kept. `cell` must be positive (else quadrix::Error).
+PointCloud without_isolated_points(const PointCloud& cloud, double cell);
+
 /// How much of the source lands on the target, for pairs without ground truth: the fraction of
 /// source points standing above the source's ground (when the model has one) that have a target
 /// point within `distance` after the transform, beside the same fraction without moving (identity).

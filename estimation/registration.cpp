@@ -698,8 +698,19 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
 
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                          const RegistrationOptions& options) {
-  const PointCloud cropped_source = crop_to_range(source, options.source_extraction);
-  const PointCloud cropped_target = crop_to_range(target, options.target_extraction);
+  // Every check measures the clouds within the extraction's range, without their isolated points:
+  // a spurious return never lands on the other scan, so each one would count against the right
+  // answer (docs/registration.md, "Isolated points").
+  PointCloud cropped_source = crop_to_range(source, options.source_extraction);
+  PointCloud cropped_target = crop_to_range(target, options.target_extraction);
+  if (options.ambiguity.isolation_cell > 0.0)
+    timed(result, "isolated_points", [&] {
+      const std::size_t source_in_range = cropped_source.size(), target_in_range = cropped_target.size();
+      tbb::parallel_invoke([&] { cropped_source = without_isolated_points(cropped_source, options.ambiguity.isolation_cell); },
+                           [&] { cropped_target = without_isolated_points(cropped_target, options.ambiguity.isolation_cell); });
+      result.counts.source_isolated_points = source_in_range - cropped_source.size();
+      result.counts.target_isolated_points = target_in_range - cropped_target.size();
+    });
   // The overlap guard first: an `ok` answer that fits the points worse than not moving becomes
   // `ambiguous`, and the dense search then gets its chance too.
   check_overlap(result, cropped_source, cropped_target, options.ambiguity);

@@ -69,6 +69,7 @@ struct AmbiguityOptions {
   double overlap_margin = 0.0;                ///< an `ok` answer whose dense overlap (check_overlap) is below the unmoved source's by more than this fraction is `ambiguous` (0: it must beat not moving; negative: no check)
   double minimum_overlap = 0.4;               ///< an `ok` answer must land at least this fraction of the source (above its ground) within 0.3 m of the target, else `ambiguous` (0: no floor)
   double confirm_below = 0.55;                ///< an `ok` answer of the quadrics landing less than this fraction of the source is `ok` only once the dense search (with the correlation over the ground) settles on it or on a better answer. Right and wrong answers meet here: on the tuning set's 600 runs (as drawn and under random yaw) 15 right `ok` answers (2.5%) landed less than 0.55 (5th percentile 0.57), so few pairs pay for the search (0: off)
+  double isolation_cell = 0.3;                ///< the checks (overlap, half turn, correlation over the ground, dense search) leave out points with no other point in their cube of this edge or the 26 around it, m (without_isolated_points; 0: keep every point)
   double half_turn_margin = 0.03;             ///< an `ok` answer must put more of the source on the target than the best ICP optimum reached from its half turn (check_half_turn), by this fraction, else `ambiguous` (negative: no check)
   bool adopt_icp_optimum = true;              ///< an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it
   std::size_t half_turn_samples = 1500;       ///< source points the half-turn check's ICP aligns (dense_search.source_samples, 3,000, is for settling): half as many cut the check from about 100 to 80 ms a KITTI pair and changed no status on the loop-closure sets or pairs.tsv (docs/registration.md)
@@ -123,6 +124,8 @@ struct RegistrationCounts {
   std::size_t quadric_correspondences = 0;    ///< of which between fitted quadrics
   std::size_t augmented_correspondences = 0;  ///< of which between augmented points (FPFH)
   std::vector<std::size_t> clique_sizes;      ///< |I*_k| per level
+  std::size_t source_isolated_points = 0;     ///< source points within range the checks left out as isolated (AmbiguityOptions::isolation_cell)
+  std::size_t target_isolated_points = 0;     ///< target points within range the checks left out as isolated
 };
 
 /// What the stages found that bears on the status. decide_registration_status turns it into the

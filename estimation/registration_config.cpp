@@ -149,6 +149,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_clique_for_ok>("ambiguity.minimum_clique_for_ok", "a winner supported by a smaller clique is ambiguous, correspondences"),
       shared_key<&R::ambiguity, &AmbiguityOptions::overlap_margin>("ambiguity.overlap_margin", "an ok answer overlapping less than the unmoved source by more than this is ambiguous, fraction (0: it must beat not moving; negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_overlap>("ambiguity.minimum_overlap", "an ok answer landing less than this fraction of the source within 0.3 m of the target is ambiguous, fraction (0: no floor)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::isolation_cell>("ambiguity.isolation_cell", "the checks leave out points with no other point in their cube of this edge or the 26 around it, m (0: keep every point)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::confirm_below>("ambiguity.confirm_below", "an ok answer landing less than this fraction of the source is ok only once the dense search settles it, fraction (0: off)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_margin>("ambiguity.half_turn_margin", "an ok answer must out-overlap the best optimum reached from its half turn about the up axis by this, fraction (negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::adopt_icp_optimum>("ambiguity.adopt_icp_optimum", "an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it"),
@@ -426,6 +427,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
       throw Error("ambiguity.half_turn_samples must be at least 6, got " + std::to_string(options.ambiguity.half_turn_samples));
     if (!(options.ambiguity.minimum_overlap >= 0.0 && options.ambiguity.minimum_overlap <= 1.0))
       throw Error("ambiguity.minimum_overlap must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.minimum_overlap));
+    if (!(options.ambiguity.isolation_cell >= 0.0 && std::isfinite(options.ambiguity.isolation_cell)))
+      throw Error("ambiguity.isolation_cell must be a length >= 0 in metres, got " + std::to_string(options.ambiguity.isolation_cell));
     if (!(options.ambiguity.confirm_below >= 0.0 && options.ambiguity.confirm_below <= 1.0))
       throw Error("ambiguity.confirm_below must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.confirm_below));
   } catch (const Error& error) {

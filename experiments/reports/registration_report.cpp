@@ -91,7 +91,9 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                       {"correspondences", c.correspondences},
                       {"quadric_correspondences", c.quadric_correspondences},
                       {"augmented_correspondences", c.augmented_correspondences},
-                      {"clique_sizes", c.clique_sizes}};
+                      {"clique_sizes", c.clique_sizes},
+                      {"source_isolated_points", c.source_isolated_points},
+                      {"target_isolated_points", c.target_isolated_points}};
   nlohmann::json candidates = nlohmann::json::array();
   for (std::size_t i = 0; i < result.candidates.size(); ++i) {
     const RegistrationCandidate& candidate = result.candidates[i];

@@ -1,6 +1,7 @@
 // Registration presets and the YAML configuration (every key of the table round-trips, unknown keys
 // and bad values are errors naming key and file), the `auto` preset on real scans, and the report
 // files of `quadrix register --out`.
+#include "estimation/overlap.h"
 #include "estimation/registration_config.h"
 #include "experiments/reports/registration_report.h"
 #include "geometry/error.h"
@@ -17,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <type_traits>
 #include <variant>
@@ -447,6 +449,46 @@ TEST(RegistrationReport, OverlapCountsSourcePointsLandingOnTheTargetAboveTheGrou
   off.translation().x() += 1.0;  // 1 m off: the sparse box no longer lines up
   EXPECT_LT(measure_overlap(source, target, off, Eigen::Vector4d(0, 0, 1, 0)).transformed, 0.5);
   EXPECT_THROW(measure_overlap(source, target, transform, std::nullopt, 0.0), Error);
+}
+
+TEST(RegistrationReport, IsolatedPointsAreLeftOutAndScannedSurfacesKept) {
+  // A wall sampled every 5 cm, one far scan line every 25 cm (a sparse surface at range), a pair of
+  // points 20 cm apart alone in space, a NaN, and 300 points uniformly spread over a 200 m cube.
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 100; ++i)
+    for (int j = 0; j < 40; ++j) points.emplace_back(0.05f * static_cast<float>(i), 10.0f, 0.05f * static_cast<float>(j));
+  const std::size_t wall = points.size();
+  for (int i = 0; i < 40; ++i) points.emplace_back(0.25f * static_cast<float>(i), 60.0f, 3.0f);
+  points.emplace_back(-50.0f, -50.0f, 5.0f);
+  points.emplace_back(-50.2f, -50.0f, 5.0f);
+  points.emplace_back(std::nanf(""), 0.0f, 0.0f);
+  const std::size_t surfaces = points.size() - 1;
+  std::mt19937 random(5);
+  std::uniform_real_distribution<float> anywhere(-100.0f, 100.0f);
+  const std::size_t strays = 300;
+  for (std::size_t i = 0; i < strays; ++i) points.emplace_back(anywhere(random), anywhere(random), anywhere(random) + 300.0f);
+  PointCloud cloud;
+  cloud.positions.resize(3, static_cast<Eigen::Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) cloud.positions.col(static_cast<Eigen::Index>(i)) = points[i];
+  cloud.intensity.assign(points.size(), 1.0f);
+
+  const PointCloud kept = without_isolated_points(cloud, 0.3);
+  // Every surface point stays, in order; of the strays (one per 26,700 m^3) none has company within
+  // the 0.9 m block, so all go, and so does the NaN.
+  ASSERT_EQ(kept.size(), surfaces);
+  for (std::size_t i = 0; i < surfaces; ++i) EXPECT_EQ(kept.positions.col(static_cast<Eigen::Index>(i)), cloud.positions.col(static_cast<Eigen::Index>(i))) << i;
+  EXPECT_TRUE(kept.intensity.empty());  // only positions are kept
+  // A lone stray beside the wall has company and stays: the rule looks at neighbours, not at surfaces.
+  cloud.positions.col(static_cast<Eigen::Index>(surfaces + 1)) = Eigen::Vector3f(1.0f, 10.2f, 1.0f);
+  EXPECT_EQ(without_isolated_points(cloud, 0.3).size(), surfaces + 1);
+  // The cube sets the reach: the scan line's points, 0.25 m apart, keep each other company in 0.3 m
+  // cubes and are alone in 0.1 m ones.
+  PointCloud line;
+  line.positions = cloud.positions.middleCols(static_cast<Eigen::Index>(wall), 40);
+  EXPECT_EQ(without_isolated_points(line, 0.3).size(), 40u);
+  EXPECT_EQ(without_isolated_points(line, 0.1).size(), 0u);
+  EXPECT_EQ(without_isolated_points(PointCloud{}, 0.3).size(), 0u);
+  EXPECT_THROW(without_isolated_points(cloud, 0.0), Error);
 }
 
 TEST(RegistrationReport, BirdsEyePictureFramesBothCloudsWhereverTheyAre) {
