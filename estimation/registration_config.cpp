@@ -2,6 +2,7 @@
 // registration_config.h).
 #include "estimation/registration_config.h"
 
+#include "estimation/overlap.h"
 #include "fitting/quadric_fitter.h"
 #include "geometry/constants.h"
 #include "geometry/error.h"
@@ -715,12 +716,20 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
   // Rings and the elevation span are properties of the sensor head, so they are measured in the
   // cloud's own frame (a tilted spinning LiDAR keeps its rings there); the up axis only tells the
   // extraction where the ground is.
-  guess.up = estimate_up_direction(cloud);
+  // Spurious returns spread through the scene (dust, rain, multipath echoes) would widen the
+  // elevation span and blur the planar voxels the up axis comes from, so both are measured on the
+  // points that keep company (the checks' rule, AmbiguityOptions::isolation_cell). Under 30% uniform
+  // outliers a KITTI scan's span measured 47.7 deg and it was taken for a Mid-360.
+  const PointCloud accompanied = without_isolated_points(cloud, AmbiguityOptions{}.isolation_cell);
+  const PointCloud& measured = accompanied.empty() ? cloud : accompanied;
+  guess.up = estimate_up_direction(measured);
   guess.near_field_fraction = near_field_fraction;
-  measure_sensor_geometry(cloud, guess);
+  measure_sensor_geometry(measured, guess);
   std::ostringstream reason;
   reason.precision(3);
-  reason << guess.point_count << " points, azimuth coverage " << 100.0 * guess.azimuth_coverage << "%, "
+  reason << guess.point_count << " points";
+  if (measured.size() < cloud.size()) reason << " (" << cloud.size() - measured.size() << " isolated left out)";
+  reason << ", azimuth coverage " << 100.0 * guess.azimuth_coverage << "%, "
          << guess.ring_count << " elevation rings over " << guess.elevation_span_degrees << " deg, median range "
          << guess.median_range << " m -> ";
   guess.preset = choose_preset(guess, reason);

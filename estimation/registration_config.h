@@ -111,7 +111,9 @@ struct SensorGuess {
 /// own frame (a sensor head's rings stay horizontal there even when it is mounted tilted); the up
 /// axis is estimated separately (estimate_up_direction) for the extraction. The origin is assumed
 /// to be the sensor (not estimated). More than 10% of the points within 1.5 m of it are
-/// the platform's own body: auto then crops everything nearer than 2 m.
+/// the platform's own body: auto then crops everything nearer than 2 m. Angles, ranges and the up
+/// axis are measured without isolated points (without_isolated_points), which would widen the span;
+/// point_count counts every point.
 SensorGuess guess_sensor_preset(const PointCloud& cloud);
 
 /// Registration options for a pair: each side's preset by name (registration_preset), or "auto"
