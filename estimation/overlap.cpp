@@ -19,7 +19,7 @@ std::uint64_t cell_key(const Eigen::Vector3i& cell) {
          static_cast<std::uint64_t>(static_cast<std::uint32_t>(cell.z()) & 0x1FFFFFu);
 }
 
-TargetCoverage::TargetCoverage(const PointCloud& target, double distance) : distance_(distance) {
+TargetCoverage::TargetCoverage(const PointCloud& target, double distance) : distance_(distance), target_size_(target.size()) {
   if (!(distance > 0.0)) throw Error("TargetCoverage: distance must be positive, got " + std::to_string(distance));
   // The target's points sorted by cell, and each occupied cell's range in that order: one sort and
   // one map instead of a vector per cell. A neighbour within `distance` lies in one of the 27 cells
@@ -27,14 +27,43 @@ TargetCoverage::TargetCoverage(const PointCloud& target, double distance) : dist
   keyed_.reserve(target.size());
   for (std::size_t i = 0; i < target.size(); ++i) {
     const Eigen::Vector3d p = target.point(i);
-    if (p.allFinite()) keyed_.emplace_back(cell_key(cell_of(p)), p.cast<float>());
+    if (p.allFinite()) keyed_.push_back({cell_key(cell_of(p)), p.cast<float>(), static_cast<std::uint32_t>(i)});
   }
-  std::sort(keyed_.begin(), keyed_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::sort(keyed_.begin(), keyed_.end(), [](const KeyedPoint& a, const KeyedPoint& b) { return a.key < b.key; });
   cells_.reserve(keyed_.size() / 4 + 1);
   for (std::size_t begin = 0, end = 0; begin < keyed_.size(); begin = end) {
-    for (end = begin + 1; end < keyed_.size() && keyed_[end].first == keyed_[begin].first;) ++end;
-    cells_.emplace(keyed_[begin].first, std::make_pair(static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)));
+    for (end = begin + 1; end < keyed_.size() && keyed_[end].key == keyed_[begin].key;) ++end;
+    cells_.emplace(keyed_[begin].key, std::make_pair(static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)));
   }
+}
+
+std::vector<Eigen::Index> TargetCoverage::leave_out_isolated_points() {
+  // A point alone in its cell is isolated when none of the 26 cells around holds a point. Decide
+  // every lone cell first, then erase: erasing one must not make its neighbour look isolated.
+  std::vector<std::uint64_t> isolated;
+  for (const auto& [key, range] : cells_) {
+    if (range.second - range.first > 1) continue;
+    const Eigen::Vector3i cell = cell_of(keyed_[range.first].position.cast<double>());
+    bool accompanied = false;
+    for (int dx = -1; dx <= 1 && !accompanied; ++dx)
+      for (int dy = -1; dy <= 1 && !accompanied; ++dy)
+        for (int dz = -1; dz <= 1 && !accompanied; ++dz)
+          accompanied = (dx != 0 || dy != 0 || dz != 0) && cells_.count(cell_key(cell + Eigen::Vector3i(dx, dy, dz))) > 0;
+    if (!accompanied) isolated.push_back(key);
+  }
+  // Every hashed point is kept but those of the isolated cells, listed in the target's order.
+  std::vector<char> keep(target_size_, 0);
+  for (const KeyedPoint& point : keyed_) keep[point.index] = 1;
+  for (const std::uint64_t key : isolated) {
+    const auto range = cells_.at(key);
+    for (std::uint32_t k = range.first; k < range.second; ++k) keep[keyed_[k].index] = 0;
+    cells_.erase(key);
+  }
+  std::vector<Eigen::Index> kept;
+  kept.reserve(keyed_.size());
+  for (std::size_t i = 0; i < keep.size(); ++i)
+    if (keep[i]) kept.push_back(static_cast<Eigen::Index>(i));
+  return kept;
 }
 
 Eigen::Vector3i TargetCoverage::cell_of(const Eigen::Vector3d& point) const {
@@ -51,7 +80,7 @@ bool TargetCoverage::covers(const Eigen::Vector3d& point) const {
         const auto found = cells_.find(cell_key(c + Eigen::Vector3i(dx, dy, dz)));
         if (found == cells_.end()) continue;
         for (std::uint32_t k = found->second.first; k < found->second.second; ++k)
-          if ((keyed_[k].second - query).squaredNorm() <= squared) return true;
+          if ((keyed_[k].position - query).squaredNorm() <= squared) return true;
       }
   return false;
 }
@@ -77,11 +106,13 @@ PointCloud without_isolated_points(const PointCloud& cloud, double cell) {
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     if (!finite[i]) continue;
     bool accompanied = count.at(keys[i]) > 1;
-    const Eigen::Vector3i cube = cube_of(cloud.point(i));
-    for (int dx = -1; dx <= 1 && !accompanied; ++dx)
-      for (int dy = -1; dy <= 1 && !accompanied; ++dy)
-        for (int dz = -1; dz <= 1 && !accompanied; ++dz)
-          accompanied = (dx != 0 || dy != 0 || dz != 0) && count.count(cell_key(cube + Eigen::Vector3i(dx, dy, dz))) > 0;
+    if (!accompanied) {
+      const Eigen::Vector3i cube = cube_of(cloud.point(i));
+      for (int dx = -1; dx <= 1 && !accompanied; ++dx)
+        for (int dy = -1; dy <= 1 && !accompanied; ++dy)
+          for (int dz = -1; dz <= 1 && !accompanied; ++dz)
+            accompanied = (dx != 0 || dy != 0 || dz != 0) && count.count(cell_key(cube + Eigen::Vector3i(dx, dy, dz))) > 0;
+    }
     if (accompanied) kept.push_back(static_cast<Eigen::Index>(i));
   }
   PointCloud result;
@@ -93,9 +124,13 @@ PointCloud without_isolated_points(const PointCloud& cloud, double cell) {
 OverlapMeasure measure_overlap(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,
                                const std::optional<Eigen::Vector4d>& source_ground, double distance) {
   if (!(distance > 0.0)) throw Error("measure_overlap: distance must be positive, got " + std::to_string(distance));
+  return measure_overlap(source, TargetCoverage(target, distance), transform, source_ground);
+}
+
+OverlapMeasure measure_overlap(const PointCloud& source, const TargetCoverage& coverage, const Eigen::Isometry3d& transform,
+                               const std::optional<Eigen::Vector4d>& source_ground) {
   OverlapMeasure measure;
-  measure.distance = distance;
-  const TargetCoverage coverage(target, distance);
+  measure.distance = coverage.distance();
   std::vector<Eigen::Vector3d> above;
   above.reserve(source.size());
   for (std::size_t i = 0; i < source.size(); ++i) {

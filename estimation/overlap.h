@@ -27,11 +27,22 @@ class TargetCoverage {
   bool covers(const Eigen::Vector3d& point) const;
   /// The distance it was built for, m.
   double distance() const { return distance_; }
+  /// Leaves out the target's isolated points by the rule of without_isolated_points with cubes of
+  /// distance() (the hash's own cells hold the counts): they cover nothing from then on. Returns the
+  /// indices, ascending, of the target points kept (non-finite points were never hashed).
+  std::vector<Eigen::Index> leave_out_isolated_points();
 
  private:
+  /// A hashed target point: its cell's key, its position and its index in the target.
+  struct KeyedPoint {
+    std::uint64_t key;
+    Eigen::Vector3f position;
+    std::uint32_t index;
+  };
   Eigen::Vector3i cell_of(const Eigen::Vector3d& point) const;
   double distance_;
-  std::vector<std::pair<std::uint64_t, Eigen::Vector3f>> keyed_;                  // target points sorted by cell key
+  std::size_t target_size_;                                                           // points of the target, hashed or not
+  std::vector<KeyedPoint> keyed_;                                                     // target points sorted by cell key
   std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> cells_;  // key -> [begin, end) in keyed_
 };
 
@@ -61,5 +72,10 @@ struct OverlapMeasure {
 /// when it is given, since a shared ground plane overlaps under any motion along it.
 OverlapMeasure measure_overlap(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,
                                const std::optional<Eigen::Vector4d>& source_ground = std::nullopt, double distance = 0.3);
+
+/// measure_overlap against a target already hashed, at `coverage.distance()`: the checks hash the
+/// target once for every answer they measure.
+OverlapMeasure measure_overlap(const PointCloud& source, const TargetCoverage& coverage, const Eigen::Isometry3d& transform,
+                               const std::optional<Eigen::Vector4d>& source_ground = std::nullopt);
 
 }  // namespace quadrix

@@ -511,6 +511,16 @@ TEST(RegistrationReport, IsolatedPointsAreLeftOutAndScannedSurfacesKept) {
   ASSERT_EQ(kept.size(), surfaces);
   for (std::size_t i = 0; i < surfaces; ++i) EXPECT_EQ(kept.positions.col(static_cast<Eigen::Index>(i)), cloud.positions.col(static_cast<Eigen::Index>(i))) << i;
   EXPECT_TRUE(kept.intensity.empty());  // only positions are kept
+  // The overlap's hash of a target applies the same rule with its own cells, and its isolated
+  // points then cover nothing.
+  TargetCoverage coverage(cloud, 0.3);
+  const Eigen::Vector3d stray = cloud.point(surfaces + 1), on_wall(1.0, 10.0, 1.0);
+  EXPECT_TRUE(coverage.covers(stray));
+  const std::vector<Eigen::Index> hashed_kept = coverage.leave_out_isolated_points();
+  ASSERT_EQ(hashed_kept.size(), surfaces);
+  for (std::size_t i = 0; i < surfaces; ++i) EXPECT_EQ(hashed_kept[i], static_cast<Eigen::Index>(i));
+  EXPECT_FALSE(coverage.covers(stray));
+  EXPECT_TRUE(coverage.covers(on_wall));
   // A lone stray beside the wall has company and stays: the rule looks at neighbours, not at surfaces.
   cloud.positions.col(static_cast<Eigen::Index>(surfaces + 1)) = Eigen::Vector3f(1.0f, 10.2f, 1.0f);
   EXPECT_EQ(without_isolated_points(cloud, 0.3).size(), surfaces + 1);
