@@ -213,7 +213,10 @@ TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
 // The same colonnade with stray points added to the source (a fifth as many as scene points, but
 // spread through the air, so more than the scene's after thinning; they never land on the
 // target): the truth still wins clearly but lands less than the 40% floor of the source, so it is
-// not `ok`; it becomes the best guess, `ambiguous`, instead of the answer two pillars off.
+// not `ok`; it becomes the best guess, `ambiguous`, instead of the answer two pillars off. The
+// checks leave isolated points out by default; here every stray is kept (isolation_cell 0), as
+// strays dense enough to keep each other company would be. With the default, fewer count, and the
+// winner lands more of the source.
 TEST(DenseSearch, ClearWinnerBelowTheFloorBecomesTheBestGuess) {
   std::mt19937 rng(13);
   ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(3.7, 0.2, 0.0), 18.0, 60000, rng);
@@ -222,22 +225,37 @@ TEST(DenseSearch, ClearWinnerBelowTheFloorBecomesTheBestGuess) {
   std::uniform_real_distribution<float> across(-20.0f, 20.0f), height(-0.4f, 2.0f);  // 0.6-3 m above the ground (z = -1)
   for (Eigen::Index i = scene_points; i < scene_points + strays; ++i)
     pair.source.positions.col(i) << across(rng), across(rng), height(rng);
-  RegistrationResult result;
-  result.status = RegistrationStatus::Ambiguous;
-  result.transform = pair.truth;
-  result.transform.pretranslate(Eigen::Vector3d(-5.0, 0.0, 0.0));
-  set_ground(result);
-  RegistrationOptions options;
-  verify_registration(result, pair.source, pair.target, options);
+  const auto verify = [&](const RegistrationOptions& options) {
+    RegistrationResult result;
+    result.status = RegistrationStatus::Ambiguous;
+    result.transform = pair.truth;
+    result.transform.pretranslate(Eigen::Vector3d(-5.0, 0.0, 0.0));
+    set_ground(result);
+    verify_registration(result, pair.source, pair.target, options);
+    return result;
+  };
+  RegistrationOptions keep_strays;
+  keep_strays.ambiguity.isolation_cell = 0.0;
+  const RegistrationResult result = verify(keep_strays);
   ASSERT_TRUE(result.dense_search.has_value());
   const DenseSearchResult& search = *result.dense_search;
-  std::printf("best %s overlap %.3f, margin %.3f: %s\n", search.optima[search.best].start.c_str(),
+  std::printf("every stray kept: best %s overlap %.3f, margin %.3f: %s\n", search.optima[search.best].start.c_str(),
               search.optima[search.best].overlap, search.margin, result.message.c_str());
-  EXPECT_LT(search.optima[search.best].overlap, options.dense_search.minimum_overlap) << "the outliers keep it below the floor";
-  EXPECT_GE(search.margin, options.dense_search.decisive_margin);
+  EXPECT_EQ(result.counts.source_isolated_points, 0u);
+  EXPECT_LT(search.optima[search.best].overlap, keep_strays.dense_search.minimum_overlap) << "the outliers keep it below the floor";
+  EXPECT_GE(search.margin, keep_strays.dense_search.decisive_margin);
   EXPECT_EQ(result.status, RegistrationStatus::Ambiguous) << result.message;
   EXPECT_LT(translation_error(result.transform, pair.truth), 0.1) << result.message;
   EXPECT_NE(result.message.find("best guess"), std::string::npos) << result.message;
+
+  const RegistrationResult filtered = verify(RegistrationOptions{});
+  ASSERT_TRUE(filtered.dense_search.has_value());
+  const DenseSearchResult& filtered_search = *filtered.dense_search;
+  std::printf("isolated strays left out (%zu): best overlap %.3f: %s\n", filtered.counts.source_isolated_points,
+              filtered_search.optima[filtered_search.best].overlap, filtered.message.c_str());
+  EXPECT_GT(filtered.counts.source_isolated_points, 0u);
+  EXPECT_GT(filtered_search.optima[filtered_search.best].overlap, search.optima[search.best].overlap);
+  EXPECT_LT(translation_error(filtered.transform, pair.truth), 0.1) << filtered.message;
 }
 
 // Nothing tells positions along a straight corridor apart: not settled, the quadric answer stands.
