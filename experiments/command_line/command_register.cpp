@@ -93,6 +93,8 @@ void run(const RegisterCommandOptions& options) {
               c.correspondences, cliques.empty() ? "-" : cliques.c_str());
   const OverlapMeasure overlap = *result.overlap;  // register_clouds measured it (check_overlap)
   std::printf(" | overlap %.2f (unmoved %.2f) at %.1f m", overlap.transformed, overlap.identity, overlap.distance);
+  if (c.source_isolated_points + c.target_isolated_points > 0)
+    std::printf(", %zu + %zu isolated points left out", c.source_isolated_points, c.target_isolated_points);
   if (ground_truth) {
     const double rte = translation_error(result.transform, *ground_truth);
     const double rre = rotation_error_degrees(result.transform, *ground_truth);
