@@ -19,6 +19,21 @@ std::uint64_t cell_key(const Eigen::Vector3i& cell) {
          static_cast<std::uint64_t>(static_cast<std::uint32_t>(cell.z()) & 0x1FFFFFu);
 }
 
+namespace {
+
+// Whether one of the 26 cells around `cell` is occupied (`occupied(key)` of its cell_key): the
+// rule of without_isolated_points for a point alone in its own cell.
+template <typename Occupied>
+bool has_occupied_neighbour(const Eigen::Vector3i& cell, const Occupied& occupied) {
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz)
+        if ((dx != 0 || dy != 0 || dz != 0) && occupied(cell_key(cell + Eigen::Vector3i(dx, dy, dz)))) return true;
+  return false;
+}
+
+}  // namespace
+
 TargetCoverage::TargetCoverage(const PointCloud& target, double distance) : distance_(distance), target_size_(target.size()) {
   if (!(distance > 0.0)) throw Error("TargetCoverage: distance must be positive, got " + std::to_string(distance));
   // The target's points sorted by cell, and each occupied cell's range in that order: one sort and
@@ -44,12 +59,8 @@ std::vector<Eigen::Index> TargetCoverage::leave_out_isolated_points() {
   for (const auto& [key, range] : cells_) {
     if (range.second - range.first > 1) continue;
     const Eigen::Vector3i cell = cell_of(keyed_[range.first].position.cast<double>());
-    bool accompanied = false;
-    for (int dx = -1; dx <= 1 && !accompanied; ++dx)
-      for (int dy = -1; dy <= 1 && !accompanied; ++dy)
-        for (int dz = -1; dz <= 1 && !accompanied; ++dz)
-          accompanied = (dx != 0 || dy != 0 || dz != 0) && cells_.count(cell_key(cell + Eigen::Vector3i(dx, dy, dz))) > 0;
-    if (!accompanied) isolated.push_back(key);
+    if (!has_occupied_neighbour(cell, [this](std::uint64_t neighbour) { return cells_.count(neighbour) > 0; }))
+      isolated.push_back(key);
   }
   // Every hashed point is kept but those of the isolated cells, listed in the target's order.
   std::vector<char> keep(target_size_, 0);
@@ -87,13 +98,14 @@ bool TargetCoverage::covers(const Eigen::Vector3d& point) const {
 
 PointCloud without_isolated_points(const PointCloud& cloud, double cell) {
   if (!(cell > 0.0)) throw Error("without_isolated_points: cell must be positive, got " + std::to_string(cell));
-  // Points per occupied cube; a point whose cube holds another is kept without looking further, so
-  // only the lone ones (few on a clean scan) look at their 26 neighbours.
+  // Points per occupied cube in a plain count map, not a TargetCoverage: the rule needs no
+  // positions, and on a KITTI scan the count map takes 6.7 ms against 12.9 for the sorted hash
+  // (microbenchmark_dense_search). A point whose cube holds another is kept without looking further.
+  const auto cube_of = [cell](const Eigen::Vector3d& p) -> Eigen::Vector3i { return (p / cell).array().floor().cast<int>(); };
   std::vector<std::uint64_t> keys(cloud.size(), 0);
   std::vector<char> finite(cloud.size(), 0);
   std::unordered_map<std::uint64_t, std::uint32_t> count;
   count.reserve(cloud.size() / 2 + 1);
-  const auto cube_of = [cell](const Eigen::Vector3d& p) -> Eigen::Vector3i { return (p / cell).array().floor().cast<int>(); };
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d p = cloud.point(i);
     if (!p.allFinite()) continue;
@@ -101,23 +113,14 @@ PointCloud without_isolated_points(const PointCloud& cloud, double cell) {
     keys[i] = cell_key(cube_of(p));
     ++count[keys[i]];
   }
+  const auto occupied = [&count](std::uint64_t key) { return count.count(key) > 0; };
   std::vector<Eigen::Index> kept;
   kept.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (!finite[i]) continue;
-    bool accompanied = count.at(keys[i]) > 1;
-    if (!accompanied) {
-      const Eigen::Vector3i cube = cube_of(cloud.point(i));
-      for (int dx = -1; dx <= 1 && !accompanied; ++dx)
-        for (int dy = -1; dy <= 1 && !accompanied; ++dy)
-          for (int dz = -1; dz <= 1 && !accompanied; ++dz)
-            accompanied = (dx != 0 || dy != 0 || dz != 0) && count.count(cell_key(cube + Eigen::Vector3i(dx, dy, dz))) > 0;
-    }
-    if (accompanied) kept.push_back(static_cast<Eigen::Index>(i));
-  }
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (finite[i] && (count.at(keys[i]) > 1 || has_occupied_neighbour(cube_of(cloud.point(i)), occupied)))
+      kept.push_back(static_cast<Eigen::Index>(i));
   PointCloud result;
-  result.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
-  for (std::size_t i = 0; i < kept.size(); ++i) result.positions.col(static_cast<Eigen::Index>(i)) = cloud.positions.col(kept[i]);
+  result.positions = cloud.positions(Eigen::all, kept);
   return result;
 }
 

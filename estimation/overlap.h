@@ -18,7 +18,7 @@ namespace quadrix {
 
 /// The target's points hashed by cells of `distance`, built once and asked many times whether a
 /// point has a target point within `distance` (measure_overlap, and the dense search for every
-/// optimum it scores).
+/// optimum it scores). Its cells also tell which target points stand alone.
 class TargetCoverage {
  public:
   /// Hashes the finite points of `target`; `distance` must be positive (else quadrix::Error).

@@ -436,11 +436,9 @@ void check_overlap_against(RegistrationResult& result, const PointCloud& source,
 void check_overlap(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                    const AmbiguityOptions& options) {
   // The hash of the target is part of what this check costs.
-  const Clock::time_point start = Clock::now();
-  const TargetCoverage coverage(target, OverlapMeasure{}.distance);
-  const double hashing_ms = elapsed_ms(start);
-  check_overlap_against(result, source, coverage, options);
-  result.timings_ms["overlap"] += hashing_ms;
+  std::optional<TargetCoverage> coverage;
+  timed(result, "overlap", [&] { coverage.emplace(target, OverlapMeasure{}.distance); });
+  check_overlap_against(result, source, *coverage, options);
 }
 
 namespace {
@@ -727,14 +725,8 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
         [&] {
           if (cell > 0.0 && cell != distance) cropped_target = without_isolated_points(cropped_target, cell);
           coverage.emplace(cropped_target, distance);
-          if (cell == distance) {
-            const std::vector<Eigen::Index> kept = coverage->leave_out_isolated_points();
-            PointCloud accompanied;
-            accompanied.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
-            for (std::size_t i = 0; i < kept.size(); ++i)
-              accompanied.positions.col(static_cast<Eigen::Index>(i)) = cropped_target.positions.col(kept[i]);
-            cropped_target = std::move(accompanied);
-          }
+          if (cell == distance)
+            cropped_target.positions = cropped_target.positions(Eigen::all, coverage->leave_out_isolated_points()).eval();
         });
     result.counts.source_isolated_points = source_in_range - cropped_source.size();
     result.counts.target_isolated_points = target_in_range - cropped_target.size();

@@ -16,7 +16,6 @@
 
 #include <nlohmann/json.hpp>
 
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
