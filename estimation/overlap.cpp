@@ -2,6 +2,7 @@
 #include "estimation/overlap.h"
 
 #include "geometry/error.h"
+#include "geometry/voxel_cells.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,27 +13,6 @@
 #include <vector>
 
 namespace quadrix {
-
-std::uint64_t cell_key(const Eigen::Vector3i& cell) {
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(cell.x()) & 0x1FFFFFu) << 42) |
-         (static_cast<std::uint64_t>(static_cast<std::uint32_t>(cell.y()) & 0x1FFFFFu) << 21) |
-         static_cast<std::uint64_t>(static_cast<std::uint32_t>(cell.z()) & 0x1FFFFFu);
-}
-
-namespace {
-
-// Whether one of the 26 cells around `cell` is occupied (`occupied(key)` of its cell_key): the
-// rule of without_isolated_points for a point alone in its own cell.
-template <typename Occupied>
-bool has_occupied_neighbour(const Eigen::Vector3i& cell, const Occupied& occupied) {
-  for (int dx = -1; dx <= 1; ++dx)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz)
-        if ((dx != 0 || dy != 0 || dz != 0) && occupied(cell_key(cell + Eigen::Vector3i(dx, dy, dz)))) return true;
-  return false;
-}
-
-}  // namespace
 
 TargetCoverage::TargetCoverage(const PointCloud& target, double distance) : distance_(distance), target_size_(target.size()) {
   if (!(distance > 0.0)) throw Error("TargetCoverage: distance must be positive, got " + std::to_string(distance));
@@ -94,34 +74,6 @@ bool TargetCoverage::covers(const Eigen::Vector3d& point) const {
           if ((keyed_[k].position - query).squaredNorm() <= squared) return true;
       }
   return false;
-}
-
-PointCloud without_isolated_points(const PointCloud& cloud, double cell) {
-  if (!(cell > 0.0)) throw Error("without_isolated_points: cell must be positive, got " + std::to_string(cell));
-  // Points per occupied cube in a plain count map, not a TargetCoverage: the rule needs no
-  // positions, and on a KITTI scan the count map takes 6.7 ms against 12.9 for the sorted hash
-  // (microbenchmark_dense_search). A point whose cube holds another is kept without looking further.
-  const auto cube_of = [cell](const Eigen::Vector3d& p) -> Eigen::Vector3i { return (p / cell).array().floor().cast<int>(); };
-  std::vector<std::uint64_t> keys(cloud.size(), 0);
-  std::vector<char> finite(cloud.size(), 0);
-  std::unordered_map<std::uint64_t, std::uint32_t> count;
-  count.reserve(cloud.size() / 2 + 1);
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3d p = cloud.point(i);
-    if (!p.allFinite()) continue;
-    finite[i] = 1;
-    keys[i] = cell_key(cube_of(p));
-    ++count[keys[i]];
-  }
-  const auto occupied = [&count](std::uint64_t key) { return count.count(key) > 0; };
-  std::vector<Eigen::Index> kept;
-  kept.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i)
-    if (finite[i] && (count.at(keys[i]) > 1 || has_occupied_neighbour(cube_of(cloud.point(i)), occupied)))
-      kept.push_back(static_cast<Eigen::Index>(i));
-  PointCloud result;
-  result.positions = cloud.positions(Eigen::all, kept);
-  return result;
 }
 
 OverlapMeasure measure_overlap(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& transform,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "geometry/point_cloud.h"
+#include "geometry/voxel_cells.h"
 
 #include <Eigen/Geometry>
 
@@ -27,7 +28,7 @@ class TargetCoverage {
   bool covers(const Eigen::Vector3d& point) const;
   /// The distance it was built for, m.
   double distance() const { return distance_; }
-  /// Leaves out the target's isolated points by the rule of without_isolated_points with cubes of
+  /// Leaves out the target's isolated points by the rule of accompanied_points (geometry/voxel_cells.h) with cubes of
   /// distance() (the hash's own cells hold the counts): they cover nothing from then on. Returns the
   /// indices, ascending, of the target points kept (non-finite points were never hashed).
   std::vector<Eigen::Index> leave_out_isolated_points();
@@ -45,16 +46,6 @@ class TargetCoverage {
   std::vector<KeyedPoint> keyed_;                                                     // target points sorted by cell key
   std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> cells_;  // key -> [begin, end) in keyed_
 };
-
-/// A 64-bit key of an integer cell (21 bits per axis): the voxel hashes of the overlap and the
-/// dense search's thinning share it.
-std::uint64_t cell_key(const Eigen::Vector3i& cell);
-
-/// The finite points of `cloud` that another point keeps company: one lies in the point's cube of
-/// edge `cell` or in one of the 26 around it. A spurious return (rain, dust, a multipath echo, an
-/// injected outlier) stands alone and is left out; a point of a scanned surface has its scan line's
-/// neighbours within that reach. Only positions are kept. `cell` must be positive (else quadrix::Error).
-PointCloud without_isolated_points(const PointCloud& cloud, double cell);
 
 /// How much of the source lands on the target, for pairs without ground truth: the fraction of
 /// source points standing above the source's ground (when the model has one) that have a target

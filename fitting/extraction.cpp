@@ -4,6 +4,7 @@
 #include "fitting/extraction_internal.h"
 
 #include "geometry/error.h"
+#include "geometry/voxel_cells.h"
 
 #include <tbb/parallel_for.h>
 
@@ -401,6 +402,8 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
                 std::to_string(cloud.size()) + " points (expected one label per point)");
   if (!(options.up.norm() > 0.0) || !options.up.allFinite())
     throw Error("extraction option 'up' must be a finite non-zero vector");
+  if (!(options.isolation_cell >= 0.0 && std::isfinite(options.isolation_cell)))
+    throw Error("extraction option 'isolation_cell' must be a length >= 0 in metres, got " + std::to_string(options.isolation_cell));
   for (const ElementClass element_class : options.label_classes) check_label_class(element_class);
   const Eigen::Vector3d up = options.up.normalized();
 
@@ -411,17 +414,33 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
   for (std::uint32_t i = 0; i < cloud.size(); ++i)
     if (within_range(points.col(i), options)) in_range.push_back(i);
   result.points_in_range = in_range.size();
+  // Spurious returns (dust, rain, multipath echoes) stand alone: left in, each would join the ground
+  // or a cluster, or seed clusters of its own among many. Under 30% uniform outliers on the shared
+  // real pairs, leaving them out here kept 18 of 18 registrations right against 16 with the checks
+  // alone, and changed no status on 600 undamaged synthetic runs (docs/registration.md).
   result.timings_ms["crop"] = detail::elapsed_ms(start);
+  if (options.isolation_cell > 0.0 && !in_range.empty()) {
+    const auto isolation_start = Clock::now();
+    in_range = accompanied_points(points, in_range, options.isolation_cell);
+    result.isolated_points = result.points_in_range - in_range.size();
+    result.timings_ms["isolated_points"] = detail::elapsed_ms(isolation_start);
+  }
   if (in_range.empty()) {
     result.status = ExtractionStatus::EmptyCloud;
     result.message = cloud.empty() ? "the cloud has no points"
-                                   : "no point within the range limits (" + std::to_string(options.minimum_range) + " to " +
-                                         std::to_string(options.maximum_range) + " m)";
+                     : result.points_in_range == 0
+                         ? "no point within the range limits (" + std::to_string(options.minimum_range) + " to " +
+                               std::to_string(options.maximum_range) + " m)"
+                         : "every one of the " + std::to_string(result.points_in_range) +
+                               " points in range is isolated (no other point within its cube of " +
+                               std::to_string(options.isolation_cell) + " m or the 26 around)";
     return result;
   }
   if (options.static_scan) {
     ExtractionResult shapes = extract_static_scan(points, cloud, in_range, options);
-    shapes.timings_ms["crop"] = result.timings_ms["crop"];
+    shapes.timings_ms.insert(result.timings_ms.begin(), result.timings_ms.end());
+    shapes.points_in_range = result.points_in_range;
+    shapes.isolated_points = result.isolated_points;
     return shapes;
   }
   ElementGroups groups = options.semantic_mode != SemanticMode::Labels ? extract_geometric(points, in_range, options, up, result)

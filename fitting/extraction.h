@@ -194,6 +194,7 @@ struct ExtractionOptions {
   bool static_scan = false;            ///< true: CGAL Efficient RANSAC shapes instead of the LiDAR pipeline
   double minimum_range = 2.0;          ///< points nearer the sensor are dropped (ego vehicle), m
   double maximum_range = 80.0;         ///< points farther away are dropped, m (0: unlimited)
+  double isolation_cell = 0.3;         ///< points in range with no other point in their cube of this edge or the 26 around are left out before modelling (spurious returns), m (0: every point kept)
   Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();  ///< scanner position (ranges, patch centre, normal orientation)
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();            ///< up axis of the cloud (unit after normalisation)
   GroundOptions ground;                ///< ground segmentation
@@ -244,6 +245,7 @@ struct ExtractionResult {
   Eigen::Vector3d ground_normal = Eigen::Vector3d::UnitZ();  ///< unit normal of the ground, pointing up
   double ground_offset = 0.0;                      ///< ground plane normal . x + offset = 0
   std::size_t points_in_range = 0;                 ///< points kept by the range limits
+  std::size_t isolated_points = 0;                 ///< of those, points left out as isolated (ExtractionOptions::isolation_cell)
   std::map<std::string, double> timings_ms;        ///< per-stage wall times
 };
 

@@ -190,7 +190,8 @@ void print_class_scores(const ClassScores& scores) {
 }
 
 // The model's header fields beside its records in model.json: inputs, preset, fitter, statuses,
-// raw size, the extracted elements per class and, with --score-labels, the class scores.
+// raw size, the points in range and how many were isolated, the extracted elements per class and,
+// with --score-labels, the class scores.
 std::string model_json_extra(const ModelCommandOptions& options, const ModellingOptions& modelling,
                              const ModellingResult& result, double raw_bytes,
                              const std::map<std::string, int>& element_counts, const std::optional<ClassScores>& scores) {
@@ -199,7 +200,9 @@ std::string model_json_extra(const ModelCommandOptions& options, const Modelling
                       options.preset + "\", \"fitter\": \"" + modelling.fitter + "\", \"status\": \"" +
                       modelling_status_name(result.status) + "\", \"extraction_status\": \"" +
                       extraction_status_name(result.extraction.status) + "\", \"raw_cloud_bytes\": " +
-                      std::to_string(static_cast<long long>(raw_bytes)) + ", \"elements_by_class\": {";
+                      std::to_string(static_cast<long long>(raw_bytes)) + ", \"points_in_range\": " +
+                      std::to_string(result.extraction.points_in_range) + ", \"isolated_points\": " +
+                      std::to_string(result.extraction.isolated_points) + ", \"elements_by_class\": {";
   bool first = true;
   for (const auto& [name, count] : element_counts) {
     extra += std::string(first ? "" : ", ") + "\"" + name + "\": " + std::to_string(count);
@@ -266,9 +269,10 @@ void print_model_summary(const ModelCommandOptions& options, const ModellingOpti
                          std::map<std::string, int> element_counts, std::size_t binary_size, double raw_bytes,
                          const std::string& page_path) {
   const SceneModel& model = result.model;
-  std::printf("quadrix model %s%s  (%zu points, %zu in range, preset %s, fitter %s)\n", options.inputs.front().c_str(),
+  std::printf("quadrix model %s%s  (%zu points, %zu in range, %zu of them isolated and left out, preset %s, fitter %s)\n",
+              options.inputs.front().c_str(),
               options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
-              result.extraction.points_in_range, options.preset.c_str(), modelling.fitter.c_str());
+              result.extraction.points_in_range, result.extraction.isolated_points, options.preset.c_str(), modelling.fitter.c_str());
   std::printf("status: %s%s%s\n\n", modelling_status_name(result.status).c_str(), result.message.empty() ? "" : " - ",
               result.message.c_str());
   std::printf("%-12s %-20s %9s %9s\n", "class", "type", "elements", "quadrics");
@@ -282,7 +286,7 @@ void print_model_summary(const ModelCommandOptions& options, const ModellingOpti
   std::printf("%-12s %-20s %9s %9zu\n", "augmented", "point", "", model.augmented_count());
   std::printf("%-12s %-20s %9zu %9zu\n\n", "total", "", result.extraction.elements.size(), model.size());
   std::printf("timings (ms, 2 shared cores):");
-  for (const char* stage : {"crop", "ground", "planes", "clusters", "lines", "simplification", "normals", "shape_detection",
+  for (const char* stage : {"crop", "isolated_points", "ground", "planes", "clusters", "lines", "simplification", "normals", "shape_detection",
                             "fitting", "selection", "augmentation", "total"}) {
     const auto it = model.timings_ms.find(stage);
     if (it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);

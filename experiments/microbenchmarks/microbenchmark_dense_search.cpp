@@ -2,12 +2,12 @@
 // 2->0 (81k points a scan, the robot's self-hits within 2 m cropped as `auto` does): one
 // point-to-plane ICP from the identity, and the whole search along the weakest direction (17 shifts
 // plus the identity); and the correlation over yaw and ground translation on KITTI-00 frames
-// 52 -> 88 (29.9 m apart); and leaving out the isolated points of KITTI frame 52 (as every check
-// does), as scanned and with 30% uniform outliers. Skips with a message when ../shared/data is absent.
+// 52 -> 88 (29.9 m apart); and leaving out the isolated points of KITTI frame 52 (as the extraction
+// and every check do), as scanned and with 30% uniform outliers. Skips with a message when ../shared/data is absent.
 #include "estimation/dense_search.h"
 #include "estimation/ground_correlation.h"
-#include "estimation/overlap.h"
 #include "geometry/io.h"
+#include "geometry/voxel_cells.h"
 
 #include <benchmark/benchmark.h>
 
@@ -84,7 +84,7 @@ void BM_CorrelateOverGroundKitti52To88(benchmark::State& state) {
 }
 BENCHMARK(BM_CorrelateOverGroundKitti52To88)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// without_isolated_points (estimation/overlap.h) on KITTI-00 frame 52 (121k points), with
+// without_isolated_points (geometry/voxel_cells.h) on KITTI-00 frame 52 (121k points), with
 // state.range(0) percent of its point count added uniformly over its bounding box.
 void BM_WithoutIsolatedPointsKitti52(benchmark::State& state) {
   const std::string path = data_path("kitti00/velodyne/000052.bin");

@@ -1,0 +1,64 @@
+// Voxel cell keys and the isolated-point rule (see voxel_cells.h).
+#include "geometry/voxel_cells.h"
+
+#include "geometry/error.h"
+
+#include <string>
+#include <unordered_map>
+
+namespace quadrix {
+
+std::uint64_t cell_key(const Eigen::Vector3i& cell) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(cell.x()) & 0x1FFFFFu) << 42) |
+         (static_cast<std::uint64_t>(static_cast<std::uint32_t>(cell.y()) & 0x1FFFFFu) << 21) |
+         static_cast<std::uint64_t>(static_cast<std::uint32_t>(cell.z()) & 0x1FFFFFu);
+}
+
+namespace {
+
+// The rule over points read through `point_of(k)` for k < count: indices k kept, ascending.
+// Points per occupied cube in a plain count map: the rule needs no positions, and on a KITTI scan
+// the count map takes 6.7 ms against 12.9 for a hash sorted by cell (microbenchmark_dense_search).
+// A point whose cube holds another is kept without looking further.
+template <typename PointOf>
+std::vector<std::uint32_t> accompanied(std::size_t count, const PointOf& point_of, double cell) {
+  if (!(cell > 0.0)) throw Error("isolated-point rule: cell must be positive, got " + std::to_string(cell));
+  const auto cube_of = [cell](const Eigen::Vector3d& p) -> Eigen::Vector3i { return (p / cell).array().floor().cast<int>(); };
+  std::vector<std::uint64_t> keys(count, 0);
+  std::vector<char> finite(count, 0);
+  std::unordered_map<std::uint64_t, std::uint32_t> points_per_cube;
+  points_per_cube.reserve(count / 2 + 1);
+  for (std::size_t k = 0; k < count; ++k) {
+    const Eigen::Vector3d p = point_of(k);
+    if (!p.allFinite()) continue;
+    finite[k] = 1;
+    keys[k] = cell_key(cube_of(p));
+    ++points_per_cube[keys[k]];
+  }
+  const auto occupied = [&points_per_cube](std::uint64_t key) { return points_per_cube.count(key) > 0; };
+  std::vector<std::uint32_t> kept;
+  kept.reserve(count);
+  for (std::size_t k = 0; k < count; ++k)
+    if (finite[k] && (points_per_cube.at(keys[k]) > 1 || has_occupied_neighbour(cube_of(point_of(k)), occupied)))
+      kept.push_back(static_cast<std::uint32_t>(k));
+  return kept;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> accompanied_points(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
+                                              double cell) {
+  std::vector<std::uint32_t> kept = accompanied(
+      candidates.size(), [&](std::size_t k) -> Eigen::Vector3d { return points.col(candidates[k]); }, cell);
+  for (std::uint32_t& k : kept) k = candidates[k];
+  return kept;
+}
+
+PointCloud without_isolated_points(const PointCloud& cloud, double cell) {
+  const std::vector<std::uint32_t> kept = accompanied(cloud.size(), [&](std::size_t i) { return cloud.point(i); }, cell);
+  PointCloud result;
+  result.positions = cloud.positions(Eigen::all, kept);
+  return result;
+}
+
+}  // namespace quadrix

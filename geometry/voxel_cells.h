@@ -1,0 +1,41 @@
+// Integer cells of a voxel grid and the isolated-point rule built on them: a spurious return
+// (rain, dust, a multipath echo, an injected outlier) stands alone, while a point of a scanned
+// surface has its scan line's neighbours within a few decimetres. The extraction leaves isolated
+// points out before modelling, and registration's checks before measuring any overlap.
+#pragma once
+
+#include "geometry/point_cloud.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <vector>
+
+namespace quadrix {
+
+/// A 64-bit key of an integer cell (21 bits per axis, so cells of 0.3 m reach ±314 km): the voxel
+/// hashes of the isolation rule, the overlap and the dense search's thinning share it.
+std::uint64_t cell_key(const Eigen::Vector3i& cell);
+
+/// Whether one of the 26 cells around `cell` is occupied, `occupied(key)` telling it by cell_key:
+/// the isolated-point rule for a point alone in its own cell, over any occupancy structure.
+template <typename Occupied>
+bool has_occupied_neighbour(const Eigen::Vector3i& cell, const Occupied& occupied) {
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz)
+        if ((dx != 0 || dy != 0 || dz != 0) && occupied(cell_key(cell + Eigen::Vector3i(dx, dy, dz)))) return true;
+  return false;
+}
+
+/// The `candidates` (columns of `points`) that another candidate keeps company: one lies in the
+/// point's cube of edge `cell` or in one of the 26 around it. Order is kept; non-finite points are
+/// left out. `cell` must be positive (else quadrix::Error).
+std::vector<std::uint32_t> accompanied_points(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
+                                              double cell);
+
+/// The finite points of `cloud` that another point keeps company, by the rule of
+/// accompanied_points. Only positions are kept. `cell` must be positive (else quadrix::Error).
+PointCloud without_isolated_points(const PointCloud& cloud, double cell);
+
+}  // namespace quadrix
