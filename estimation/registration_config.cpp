@@ -82,6 +82,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       extraction_key<&E::minimum_range>("extraction.minimum_range", "points nearer the sensor are dropped, m"),
       extraction_key<&E::maximum_range>("extraction.maximum_range", "points farther away are dropped, m (0: unlimited)"),
       extraction_key<&E::isolation_cell>("extraction.isolation_cell", "points in range with no other point in their cube of this edge or the 26 around are left out before modelling, m (0: every point kept)"),
+      extraction_key<&E::isolation_neighbours>("extraction.isolation_neighbours", "a point in range is left out before modelling when fewer than this many other points lie in its isolation cube or the 26 around (at least 1)"),
       extraction_key<&E::static_scan>("extraction.static_scan", "CGAL Efficient RANSAC shapes instead of the LiDAR pipeline (static scans)"),
       extraction_key<&E::up>("extraction.up", "up axis of the cloud, unitless (normalised when read)"),
       extraction_key<&E::ground, &GroundOptions::inlier_distance>("extraction.ground.inlier_distance", "point-to-patch-plane distance of ground points, m"),
@@ -431,9 +432,12 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
       throw Error("ambiguity.minimum_overlap must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.minimum_overlap));
     if (!(options.ambiguity.isolation_cell >= 0.0 && std::isfinite(options.ambiguity.isolation_cell)))
       throw Error("ambiguity.isolation_cell must be a length >= 0 in metres, got " + std::to_string(options.ambiguity.isolation_cell));
-    for (const ExtractionOptions* extraction : {&options.source_extraction, &options.target_extraction})
+    for (const ExtractionOptions* extraction : {&options.source_extraction, &options.target_extraction}) {
       if (!(extraction->isolation_cell >= 0.0 && std::isfinite(extraction->isolation_cell)))
         throw Error("extraction.isolation_cell must be a length >= 0 in metres, got " + std::to_string(extraction->isolation_cell));
+      if (extraction->isolation_neighbours < 1)
+        throw Error("extraction.isolation_neighbours must be at least 1, got " + std::to_string(extraction->isolation_neighbours));
+    }
     if (!(options.ambiguity.confirm_below >= 0.0 && options.ambiguity.confirm_below <= 1.0))
       throw Error("ambiguity.confirm_below must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.confirm_below));
   } catch (const Error& error) {

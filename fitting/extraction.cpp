@@ -404,6 +404,8 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
     throw Error("extraction option 'up' must be a finite non-zero vector");
   if (!(options.isolation_cell >= 0.0 && std::isfinite(options.isolation_cell)))
     throw Error("extraction option 'isolation_cell' must be a length >= 0 in metres, got " + std::to_string(options.isolation_cell));
+  if (options.isolation_neighbours < 1)
+    throw Error("extraction option 'isolation_neighbours' must be at least 1, got " + std::to_string(options.isolation_neighbours));
   for (const ElementClass element_class : options.label_classes) check_label_class(element_class);
   const Eigen::Vector3d up = options.up.normalized();
 
@@ -421,7 +423,7 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
   result.timings_ms["crop"] = detail::elapsed_ms(start);
   if (options.isolation_cell > 0.0 && !in_range.empty()) {
     const auto isolation_start = Clock::now();
-    in_range = accompanied_points(points, in_range, options.isolation_cell);
+    in_range = accompanied_points(points, in_range, options.isolation_cell, options.isolation_neighbours);
     result.isolated_points = result.points_in_range - in_range.size();
     result.timings_ms["isolated_points"] = detail::elapsed_ms(isolation_start);
   }

@@ -195,6 +195,7 @@ struct ExtractionOptions {
   double minimum_range = 2.0;          ///< points nearer the sensor are dropped (ego vehicle), m
   double maximum_range = 80.0;         ///< points farther away are dropped, m (0: unlimited)
   double isolation_cell = 0.3;         ///< points in range with no other point in their cube of this edge or the 26 around are left out before modelling (spurious returns), m (0: every point kept)
+  int isolation_neighbours = 1;        ///< ... or with fewer than this many other points there
   Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();  ///< scanner position (ranges, patch centre, normal orientation)
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();            ///< up axis of the cloud (unit after normalisation)
   GroundOptions ground;                ///< ground segmentation

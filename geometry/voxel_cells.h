@@ -28,11 +28,12 @@ bool has_occupied_neighbour(const Eigen::Vector3i& cell, const Occupied& occupie
   return false;
 }
 
-/// The `candidates` (columns of `points`) that another candidate keeps company: one lies in the
-/// point's cube of edge `cell` or in one of the 26 around it. Order is kept; non-finite points are
-/// left out. `cell` must be positive (else quadrix::Error).
+/// The `candidates` (columns of `points`) that other candidates keep company: at least
+/// `neighbours` of them lie in the point's cube of edge `cell` or in the 26 around it. Order is
+/// kept; non-finite points are left out. `cell` must be positive and `neighbours` at least 1 (else
+/// quadrix::Error).
 std::vector<std::uint32_t> accompanied_points(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
-                                              double cell);
+                                              double cell, int neighbours = 1);
 
 /// The finite points of `cloud` that another point keeps company, by the rule of
 /// accompanied_points. Only positions are kept. `cell` must be positive (else quadrix::Error).

@@ -221,6 +221,7 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("scalar_section.yaml", "extraction:\n  planes: 3\n", "'extraction.planes'");
   expect_error_naming("list_for_number.yaml", "selection:\n  dcs_phi: [1, 2]\n", "'selection.dcs_phi'");
   expect_error_naming("negative_isolation.yaml", "extraction:\n  isolation_cell: -0.3\n", "extraction.isolation_cell must be a length >= 0");
+  expect_error_naming("no_neighbours.yaml", "extraction:\n  isolation_neighbours: 0\n", "extraction.isolation_neighbours must be at least 1");
   RegistrationOptions ignored;
   EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
   EXPECT_THROW(registration_preset("hdl999"), Error);

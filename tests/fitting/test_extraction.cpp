@@ -563,6 +563,9 @@ TEST(Extraction, IsolatedStraysAreLeftOutBeforeModelling) {
   ExtractionOptions negative = extraction_preset("vlp64");
   negative.isolation_cell = -0.3;
   EXPECT_THROW(extract_elements(scattered, negative), Error);
+  ExtractionOptions no_neighbours = extraction_preset("vlp64");
+  no_neighbours.isolation_neighbours = 0;
+  EXPECT_THROW(extract_elements(scattered, no_neighbours), Error);
 }
 
 TEST(Extraction, UpAxisIsConfigurable) {

@@ -38,6 +38,12 @@ TEST(VoxelCells, APointIsKeptWhenAnotherCandidateLiesInItsCubeOrTheTwentySixArou
   EXPECT_EQ(accompanied_points(points, {2, 3}, 1.0), (std::vector<std::uint32_t>{}));
   // A smaller cube separates 1 from 2 (0.6 m apart along each axis, two 0.25 m cubes between).
   EXPECT_EQ(accompanied_points(points, {1, 2}, 0.25), (std::vector<std::uint32_t>{}));
+  // Asking for two neighbours: 0, 1 and 2 have two each within their blocks; with 2 gone, 0 and 1
+  // keep only each other.
+  EXPECT_EQ(accompanied_points(points, {0, 1, 2, 3}, 1.0, 2), (std::vector<std::uint32_t>{0, 1, 2}));
+  EXPECT_EQ(accompanied_points(points, {0, 1, 3}, 1.0, 2), (std::vector<std::uint32_t>{}));
+  EXPECT_EQ(accompanied_points(points, {0, 1, 3}, 1.0, 1), (std::vector<std::uint32_t>{0, 1}));
+  EXPECT_THROW(accompanied_points(points, {0, 1}, 1.0, 0), Error);
   EXPECT_TRUE(accompanied_points(points, {}, 1.0).empty());
   EXPECT_THROW(accompanied_points(points, {0, 1}, 0.0), Error);
   EXPECT_THROW(accompanied_points(points, {0, 1}, -1.0), Error);
