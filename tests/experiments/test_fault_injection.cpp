@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -164,6 +165,29 @@ TEST(FaultInjectionRealData, DamagedSourcesNeverCrashAndAreNeverOkAndWrong) {
   EXPECT_GE(successes, rows_run / 2) << successes << " of " << rows_run << " rows succeeded";
 }
 
+// The rows of `pairs` with 30% uniform outliers added to every source (`trials` draws a pair from
+// `seed`): first with the default options, then with the YAML `switched_off` applied.
+std::array<std::vector<BenchRow>, 2> run_under_outliers_with_and_without(const std::vector<BenchPair>& pairs,
+                                                                         const std::string& switched_off, int trials,
+                                                                         std::uint64_t seed) {
+  const std::filesystem::path config =
+      std::filesystem::temp_directory_path() / ("quadrix_switched_off_" + std::to_string(::getpid()) + ".yaml");
+  std::ofstream(config) << switched_off;
+  std::array<std::vector<BenchRow>, 2> rows;
+  for (const bool with_rule : {true, false}) {
+    BenchOptions options;
+    options.corruption = "outliers-30";
+    options.trials = trials;
+    options.seed = seed;
+    options.jobs = 2;
+    options.progress = false;
+    if (!with_rule) options.config = config.string();
+    rows[with_rule ? 0 : 1] = run_benchmark(pairs, options);
+  }
+  std::filesystem::remove(config);
+  return rows;
+}
+
 // Uniform outliers never land on the target. Left in, they count against the right answer in every
 // check, and loop closures come back `ambiguous`. The checks leave isolated points out
 // (AmbiguityOptions::isolation_cell), and the KITTI pairs of pairs.tsv closer than the paper's hard
@@ -175,16 +199,10 @@ TEST(FaultInjectionRealData, UniformOutliersLeaveRightAnswersOk) {
   for (const BenchPair& pair : read_pairs_tsv(testing::shared_data_path("pairs.tsv")))
     if (pair.ground_truth && pair.distance < 20.0 && pair.id.rfind("kitti00_lc_", 0) == 0) pairs.push_back(pair);
   if (pairs.empty()) GTEST_SKIP() << "pairs.tsv holds no KITTI loop closure closer than 20 m";
-  const std::filesystem::path config = std::filesystem::temp_directory_path() / ("quadrix_keep_isolated_" + std::to_string(::getpid()) + ".yaml");
-  std::ofstream(config) << "ambiguity:\n  isolation_cell: 0\n";
+  const auto rows = run_under_outliers_with_and_without(pairs, "ambiguity:\n  isolation_cell: 0\n", 1, 1);
   std::size_t ok_with = 0, ok_without = 0;
   for (const bool leave_out : {true, false}) {
-    BenchOptions options;
-    options.corruption = "outliers-30";
-    options.jobs = 2;
-    options.progress = false;
-    if (!leave_out) options.config = config.string();
-    for (const BenchRow& row : run_benchmark(pairs, options)) {
+    for (const BenchRow& row : rows[leave_out ? 0 : 1]) {
       std::printf("%-20s isolated points %s: %s, RTE %.2f m, overlap %.3f\n", row.pair_id.c_str(), leave_out ? "left out" : "kept",
                   row.status.c_str(), row.rte, row.overlap);
       EXPECT_FALSE(row.status == "ok" && !row.success) << row.pair_id << ": " << row.message;
@@ -194,7 +212,6 @@ TEST(FaultInjectionRealData, UniformOutliersLeaveRightAnswersOk) {
       (leave_out ? ok_with : ok_without) += row.status == "ok" && row.success ? 1 : 0;
     }
   }
-  std::filesystem::remove(config);
   EXPECT_GE(ok_with, (3 * pairs.size() + 3) / 4) << ok_with << " of " << pairs.size() << " ok and right";
   EXPECT_GT(ok_with, ok_without);
 }
@@ -211,19 +228,10 @@ TEST(FaultInjectionRealData, UniformOutliersInSmallScenesAreLeftOutBeforeModelli
   for (const BenchPair& pair : read_pairs_tsv(testing::shared_data_path("pairs.tsv")))
     if (pair.ground_truth && (pair.id.rfind("3dtk_", 0) == 0 || pair.id.rfind("hdl32", 0) == 0)) pairs.push_back(pair);
   if (pairs.empty()) GTEST_SKIP() << "pairs.tsv holds no 3DTK or HDL-32E pair with ground truth";
-  const std::filesystem::path config =
-      std::filesystem::temp_directory_path() / ("quadrix_model_isolated_" + std::to_string(::getpid()) + ".yaml");
-  std::ofstream(config) << "extraction:\n  isolation_cell: 0\n";
+  const auto rows = run_under_outliers_with_and_without(pairs, "extraction:\n  isolation_cell: 0\n", 4, 5);
   std::size_t right_with = 0, right_without = 0;
   for (const bool leave_out : {true, false}) {
-    BenchOptions options;
-    options.corruption = "outliers-30";
-    options.trials = 4;
-    options.seed = 5;
-    options.jobs = 2;
-    options.progress = false;
-    if (!leave_out) options.config = config.string();
-    for (const BenchRow& row : run_benchmark(pairs, options)) {
+    for (const BenchRow& row : rows[leave_out ? 0 : 1]) {
       std::printf("%-12s trial %d, isolated points %s the modelling: %s, RTE %.2f m\n", row.pair_id.c_str(), row.trial,
                   leave_out ? "left out of" : "kept in", row.status.c_str(), row.rte);
       EXPECT_FALSE(row.status == "ok" && !row.success) << row.pair_id << ": " << row.message;
@@ -233,7 +241,6 @@ TEST(FaultInjectionRealData, UniformOutliersInSmallScenesAreLeftOutBeforeModelli
       (leave_out ? right_with : right_without) += row.success ? 1 : 0;
     }
   }
-  std::filesystem::remove(config);
   std::printf("right: %zu of %zu with the rule, %zu without\n", right_with, 4 * pairs.size(), right_without);
   EXPECT_GE(right_with, right_without);
 }
