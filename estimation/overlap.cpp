@@ -32,15 +32,27 @@ TargetCoverage::TargetCoverage(const PointCloud& target, double distance) : dist
   }
 }
 
-std::vector<Eigen::Index> TargetCoverage::leave_out_isolated_points() {
-  // A point alone in its cell is isolated when none of the 26 cells around holds a point. Decide
-  // every lone cell first, then erase: erasing one must not make its neighbour look isolated.
+std::vector<Eigen::Index> TargetCoverage::leave_out_isolated_points(int neighbours) {
+  if (neighbours < 1) throw Error("TargetCoverage: at least one neighbour must be asked for, got " + std::to_string(neighbours));
+  // The points of a cell holding at most `neighbours` are isolated when the 26 cells around do not
+  // make up the rest. Decide every such cell first, then erase: erasing one must not make its
+  // neighbour look isolated.
+  const auto points_in = [this](std::uint64_t key) -> std::uint32_t {
+    const auto found = cells_.find(key);
+    return found == cells_.end() ? 0u : found->second.second - found->second.first;
+  };
+  const std::uint32_t wanted = static_cast<std::uint32_t>(neighbours);
   std::vector<std::uint64_t> isolated;
   for (const auto& [key, range] : cells_) {
-    if (range.second - range.first > 1) continue;
+    const std::uint32_t in_own_cell = range.second - range.first;
+    if (in_own_cell > wanted) continue;
     const Eigen::Vector3i cell = cell_of(keyed_[range.first].position.cast<double>());
-    if (!has_occupied_neighbour(cell, [this](std::uint64_t neighbour) { return cells_.count(neighbour) > 0; }))
-      isolated.push_back(key);
+    std::uint32_t others = in_own_cell - 1;
+    for (int dx = -1; dx <= 1 && others < wanted; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz)
+          if (dx != 0 || dy != 0 || dz != 0) others += points_in(cell_key(cell + Eigen::Vector3i(dx, dy, dz)));
+    if (others < wanted) isolated.push_back(key);
   }
   // Every hashed point is kept but those of the isolated cells, listed in the target's order.
   std::vector<char> keep(target_size_, 0);

@@ -30,8 +30,9 @@ class TargetCoverage {
   double distance() const { return distance_; }
   /// Leaves out the target's isolated points by the rule of accompanied_points (geometry/voxel_cells.h) with cubes of
   /// distance() (the hash's own cells hold the counts): they cover nothing from then on. Returns the
-  /// indices, ascending, of the target points kept (non-finite points were never hashed).
-  std::vector<Eigen::Index> leave_out_isolated_points();
+  /// indices, ascending, of the target points kept (non-finite points were never hashed). A point
+  /// is kept when at least `neighbours` (>= 1, else quadrix::Error) other points share its block.
+  std::vector<Eigen::Index> leave_out_isolated_points(int neighbours = 1);
 
  private:
   /// A hashed target point: its cell's key, its position and its index in the target.

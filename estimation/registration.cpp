@@ -717,16 +717,17 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
   std::optional<TargetCoverage> coverage;
   timed(result, "check_inputs", [&] {
     const double cell = options.ambiguity.isolation_cell, distance = OverlapMeasure{}.distance;
+    const int neighbours = options.ambiguity.isolation_neighbours;
     const std::size_t source_in_range = cropped_source.size(), target_in_range = cropped_target.size();
     tbb::parallel_invoke(
         [&] {
-          if (cell > 0.0) cropped_source = without_isolated_points(cropped_source, cell);
+          if (cell > 0.0) cropped_source = without_isolated_points(cropped_source, cell, neighbours);
         },
         [&] {
-          if (cell > 0.0 && cell != distance) cropped_target = without_isolated_points(cropped_target, cell);
+          if (cell > 0.0 && cell != distance) cropped_target = without_isolated_points(cropped_target, cell, neighbours);
           coverage.emplace(cropped_target, distance);
           if (cell == distance)
-            cropped_target.positions = cropped_target.positions(Eigen::all, coverage->leave_out_isolated_points()).eval();
+            cropped_target.positions = cropped_target.positions(Eigen::all, coverage->leave_out_isolated_points(neighbours)).eval();
         });
     result.counts.source_isolated_points = source_in_range - cropped_source.size();
     result.counts.target_isolated_points = target_in_range - cropped_target.size();

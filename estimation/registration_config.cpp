@@ -153,6 +153,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::overlap_margin>("ambiguity.overlap_margin", "an ok answer overlapping less than the unmoved source by more than this is ambiguous, fraction (0: it must beat not moving; negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::minimum_overlap>("ambiguity.minimum_overlap", "an ok answer landing less than this fraction of the source within 0.3 m of the target is ambiguous, fraction (0: no floor)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::isolation_cell>("ambiguity.isolation_cell", "the checks leave out points with no other point in their cube of this edge or the 26 around it, m (0: keep every point)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::isolation_neighbours>("ambiguity.isolation_neighbours", "the checks leave out points with fewer than this many other points in their isolation cube or the 26 around (at least 1)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::confirm_below>("ambiguity.confirm_below", "an ok answer landing less than this fraction of the source is ok only once the dense search settles it, fraction (0: off)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_margin>("ambiguity.half_turn_margin", "an ok answer must out-overlap the best optimum reached from its half turn about the up axis by this, fraction (negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::adopt_icp_optimum>("ambiguity.adopt_icp_optimum", "an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it"),
@@ -432,6 +433,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
       throw Error("ambiguity.minimum_overlap must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.minimum_overlap));
     if (!(options.ambiguity.isolation_cell >= 0.0 && std::isfinite(options.ambiguity.isolation_cell)))
       throw Error("ambiguity.isolation_cell must be a length >= 0 in metres, got " + std::to_string(options.ambiguity.isolation_cell));
+    if (options.ambiguity.isolation_neighbours < 1)
+      throw Error("ambiguity.isolation_neighbours must be at least 1, got " + std::to_string(options.ambiguity.isolation_neighbours));
     for (const ExtractionOptions* extraction : {&options.source_extraction, &options.target_extraction}) {
       if (!(extraction->isolation_cell >= 0.0 && std::isfinite(extraction->isolation_cell)))
         throw Error("extraction.isolation_cell must be a length >= 0 in metres, got " + std::to_string(extraction->isolation_cell));

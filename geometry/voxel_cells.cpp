@@ -71,8 +71,8 @@ std::vector<std::uint32_t> accompanied_points(const Eigen::Matrix3Xd& points, co
   return kept;
 }
 
-PointCloud without_isolated_points(const PointCloud& cloud, double cell) {
-  const std::vector<std::uint32_t> kept = accompanied(cloud.size(), [&](std::size_t i) { return cloud.point(i); }, cell, 1);
+PointCloud without_isolated_points(const PointCloud& cloud, double cell, int neighbours) {
+  const std::vector<std::uint32_t> kept = accompanied(cloud.size(), [&](std::size_t i) { return cloud.point(i); }, cell, neighbours);
   PointCloud result;
   result.positions = cloud.positions(Eigen::all, kept);
   return result;

@@ -35,8 +35,9 @@ bool has_occupied_neighbour(const Eigen::Vector3i& cell, const Occupied& occupie
 std::vector<std::uint32_t> accompanied_points(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates,
                                               double cell, int neighbours = 1);
 
-/// The finite points of `cloud` that another point keeps company, by the rule of
-/// accompanied_points. Only positions are kept. `cell` must be positive (else quadrix::Error).
-PointCloud without_isolated_points(const PointCloud& cloud, double cell);
+/// The finite points of `cloud` that at least `neighbours` other points keep company, by the rule
+/// of accompanied_points. Only positions are kept. `cell` must be positive and `neighbours` at
+/// least 1 (else quadrix::Error).
+PointCloud without_isolated_points(const PointCloud& cloud, double cell, int neighbours = 1);
 
 }  // namespace quadrix

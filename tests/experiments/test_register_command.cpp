@@ -222,6 +222,7 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("list_for_number.yaml", "selection:\n  dcs_phi: [1, 2]\n", "'selection.dcs_phi'");
   expect_error_naming("negative_isolation.yaml", "extraction:\n  isolation_cell: -0.3\n", "extraction.isolation_cell must be a length >= 0");
   expect_error_naming("no_neighbours.yaml", "extraction:\n  isolation_neighbours: 0\n", "extraction.isolation_neighbours must be at least 1");
+  expect_error_naming("no_check_neighbours.yaml", "ambiguity:\n  isolation_neighbours: 0\n", "ambiguity.isolation_neighbours must be at least 1");
   RegistrationOptions ignored;
   EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
   EXPECT_THROW(registration_preset("hdl999"), Error);
@@ -523,6 +524,19 @@ TEST(RegistrationReport, IsolatedPointsAreLeftOutAndScannedSurfacesKept) {
   for (std::size_t i = 0; i < surfaces; ++i) EXPECT_EQ(hashed_kept[i], static_cast<Eigen::Index>(i));
   EXPECT_FALSE(coverage.covers(stray));
   EXPECT_TRUE(coverage.covers(on_wall));
+  // Asking for two neighbours: the pair alone in space goes, every wall point stays, and the hash
+  // keeps the very points the count map keeps.
+  const PointCloud two = without_isolated_points(cloud, 0.3, 2);
+  TargetCoverage coverage_two(cloud, 0.3);
+  const std::vector<Eigen::Index> hashed_two = coverage_two.leave_out_isolated_points(2);
+  ASSERT_EQ(hashed_two.size(), two.size());
+  for (std::size_t k = 0; k < hashed_two.size(); ++k) EXPECT_EQ(two.positions.col(static_cast<Eigen::Index>(k)), cloud.positions.col(hashed_two[k])) << k;
+  EXPECT_GE(hashed_two.size(), wall);
+  EXPECT_EQ(hashed_two[wall - 1], static_cast<Eigen::Index>(wall - 1));
+  EXPECT_EQ(std::count_if(hashed_two.begin(), hashed_two.end(), [&](Eigen::Index i) { return i == static_cast<Eigen::Index>(wall + 40) || i == static_cast<Eigen::Index>(wall + 41); }), 0);
+  EXPECT_FALSE(coverage_two.covers(cloud.point(wall + 40)));
+  EXPECT_THROW(TargetCoverage(cloud, 0.3).leave_out_isolated_points(0), Error);
+  EXPECT_THROW(without_isolated_points(cloud, 0.3, 0), Error);
   // A lone stray beside the wall has company and stays: the rule looks at neighbours, not at surfaces.
   cloud.positions.col(static_cast<Eigen::Index>(surfaces + 1)) = Eigen::Vector3f(1.0f, 10.2f, 1.0f);
   EXPECT_EQ(without_isolated_points(cloud, 0.3).size(), surfaces + 1);
