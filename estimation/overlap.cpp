@@ -47,12 +47,7 @@ std::vector<Eigen::Index> TargetCoverage::leave_out_isolated_points(int neighbou
     const std::uint32_t in_own_cell = range.second - range.first;
     if (in_own_cell > wanted) continue;
     const Eigen::Vector3i cell = cell_of(keyed_[range.first].position.cast<double>());
-    std::uint32_t others = in_own_cell - 1;
-    for (int dx = -1; dx <= 1 && others < wanted; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz)
-          if (dx != 0 || dy != 0 || dz != 0) others += points_in(cell_key(cell + Eigen::Vector3i(dx, dy, dz)));
-    if (others < wanted) isolated.push_back(key);
+    if (!has_enough_company(cell, in_own_cell - 1, wanted, points_in)) isolated.push_back(key);
   }
   // Every hashed point is kept but those of the isolated cells, listed in the target's order.
   std::vector<char> keep(target_size_, 0);

@@ -36,26 +36,17 @@ std::vector<std::uint32_t> accompanied(std::size_t count, const PointOf& point_o
     keys[k] = cell_key(cube_of(p));
     ++points_per_cube[keys[k]];
   }
-  const auto occupied = [&points_per_cube](std::uint64_t key) { return points_per_cube.count(key) > 0; };
-  // Other points in the block of 27 cubes around a point, counted until `neighbours` are found.
-  const auto enough_company = [&](const Eigen::Vector3i& cube, std::uint32_t in_own_cube) {
-    std::uint32_t others = in_own_cube - 1;
-    for (int dx = -1; dx <= 1 && others < static_cast<std::uint32_t>(neighbours); ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          if (dx == 0 && dy == 0 && dz == 0) continue;
-          const auto found = points_per_cube.find(cell_key(cube + Eigen::Vector3i(dx, dy, dz)));
-          if (found != points_per_cube.end()) others += found->second;
-        }
-    return others >= static_cast<std::uint32_t>(neighbours);
+  const auto points_in = [&points_per_cube](std::uint64_t key) -> std::uint32_t {
+    const auto found = points_per_cube.find(key);
+    return found == points_per_cube.end() ? 0u : found->second;
   };
+  const std::uint32_t wanted = static_cast<std::uint32_t>(neighbours);
   std::vector<std::uint32_t> kept;
   kept.reserve(count);
   for (std::size_t k = 0; k < count; ++k) {
     if (!finite[k]) continue;
     const std::uint32_t in_own_cube = points_per_cube.at(keys[k]);
-    if (in_own_cube > static_cast<std::uint32_t>(neighbours) ||
-        (neighbours == 1 ? has_occupied_neighbour(cube_of(point_of(k)), occupied) : enough_company(cube_of(point_of(k)), in_own_cube)))
+    if (in_own_cube > wanted || has_enough_company(cube_of(point_of(k)), in_own_cube - 1, wanted, points_in))
       kept.push_back(static_cast<std::uint32_t>(k));
   }
   return kept;

@@ -17,15 +17,20 @@ namespace quadrix {
 /// hashes of the isolation rule, the overlap and the dense search's thinning share it.
 std::uint64_t cell_key(const Eigen::Vector3i& cell);
 
-/// Whether one of the 26 cells around `cell` is occupied, `occupied(key)` telling it by cell_key:
-/// the isolated-point rule for a point alone in its own cell, over any occupancy structure.
-template <typename Occupied>
-bool has_occupied_neighbour(const Eigen::Vector3i& cell, const Occupied& occupied) {
+/// The isolated-point rule for a point of `cell` over any occupancy structure: whether its
+/// `others_in_own_cell` plus the points of the 26 cells around (`points_in(key)` counting a cell
+/// by cell_key) reach `neighbours`. Stops counting as soon as they do.
+template <typename PointsIn>
+bool has_enough_company(const Eigen::Vector3i& cell, std::uint32_t others_in_own_cell, std::uint32_t neighbours,
+                        const PointsIn& points_in) {
+  std::uint32_t others = others_in_own_cell;
   for (int dx = -1; dx <= 1; ++dx)
     for (int dy = -1; dy <= 1; ++dy)
-      for (int dz = -1; dz <= 1; ++dz)
-        if ((dx != 0 || dy != 0 || dz != 0) && occupied(cell_key(cell + Eigen::Vector3i(dx, dy, dz)))) return true;
-  return false;
+      for (int dz = -1; dz <= 1; ++dz) {
+        if (others >= neighbours) return true;
+        if (dx != 0 || dy != 0 || dz != 0) others += points_in(cell_key(cell + Eigen::Vector3i(dx, dy, dz)));
+      }
+  return others >= neighbours;
 }
 
 /// The `candidates` (columns of `points`) that other candidates keep company: at least
