@@ -17,8 +17,14 @@ point_class_transfer.py) and 2-80 m from the sensor:
   intensity   the scan's remission (KITTI's fourth float, 0-1)
 Each is printed as the 10/25/50/75/90th percentiles per class (SemanticKITTI classes mapped as in
 point_class_transfer.py: other, vegetation, trunk, pole incl. traffic sign, vehicle) and for the
-building and fence labels inside "other". Results are recorded in docs/modelling.md ("Classes from
-geometry: what transfers").
+building and fence labels inside "other".
+
+Then a bound: for vegetation, trunks and poles, and for each feature above and the height above the
+ground, the best rule `low <= feature <= high` that keeps 80% of the class's points (the recall the
+acceptance asks for), over every point 2-80 m from the sensor, with low and high chosen on the frame
+itself; printed with its precision. A rule set on the test frame is an upper bound for any
+threshold on that feature, not a classifier. Results are recorded in docs/modelling.md ("Classes
+from geometry: what transfers").
 """
 
 import argparse
@@ -64,6 +70,17 @@ def column_top(points, height, size=0.5):
     return top[column]
 
 
+def precision_at_recall(values, members, recall=0.8, steps=21):
+    """The best band [low, high] of `values` holding `recall` of the members: (precision, low, high)."""
+    best = (0.0, 0.0, 0.0)
+    for start in np.linspace(0.0, 1.0 - recall, steps):
+        low, high = np.quantile(values[members], [start, start + recall])
+        admitted = (values >= low) & (values <= high)
+        precision = (admitted & members).sum() / max(admitted.sum(), 1)
+        best = max(best, (precision, low, high))
+    return best
+
+
 def percentiles(values):
     return ' '.join(f'{v:6.3f}' for v in np.percentile(values, [10, 25, 50, 75, 90]))
 
@@ -99,6 +116,15 @@ def main():
                 chosen = members & above
                 if chosen.any():
                     print(f'    {name:12s} {chosen.sum():6d}  {percentiles(values[chosen])}')
+        features['height above ground'] = height
+        print(f'frame {frame}: the best band of one feature holding 80% of a class (all points 2-80 m), its precision')
+        for index in (1, 2, 3):
+            members = classes == index
+            if not members.any():
+                continue
+            for feature, values in features.items():
+                precision, low, high = precision_at_recall(values, members)
+                print(f'  {CLASSES[index]:10s} {feature:28s} {low:7.3f} .. {high:7.3f}  precision {precision:.3f}')
 
 
 if __name__ == '__main__':

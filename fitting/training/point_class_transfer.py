@@ -25,7 +25,6 @@ import os
 import sys
 
 import numpy as np
-import torch
 from scipy.ndimage import minimum_filter
 from scipy.spatial import cKDTree
 
@@ -103,6 +102,7 @@ def simulated_scans(quadrix, seed, foliage):
 
 
 def train(features_, classes, epochs=30, seed=0):
+    import torch  # here, so class_separability.py can share this file's features with numpy and scipy alone
     torch.manual_seed(seed)
     mean, deviation = features_.mean(0), features_.std(0) + 1e-6
     inputs, targets = torch.tensor((features_ - mean) / deviation), torch.tensor(classes)
