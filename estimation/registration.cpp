@@ -403,10 +403,14 @@ void check_overlap_against(RegistrationResult& result, const PointCloud& source,
     // The floor: a wrong answer that happens to score well among the quadrics rarely puts much of
     // the source on the target (AmbiguityOptions::minimum_overlap; docs/registration.md says how it was set).
     result.findings.overlaps_too_little = overlap.sampled > 0 && overlap.transformed < options.minimum_overlap;
-    // Between the floor and confirm_below right and wrong answers meet: such an answer waits for the
-    // dense search (verify_registration), unless that search has just settled it.
+    // Between the floor and confirm_below right and wrong answers meet, and so do answers that land
+    // hardly more than not moving (an ICP optimum near the start): such an answer waits for the dense
+    // search (verify_registration), unless that search has just settled it.
+    const bool low_overlap = overlap.transformed < options.confirm_below;
+    const bool near_identity_overlap =
+        options.confirm_over_identity > 0.0 && overlap.transformed < overlap.identity + options.confirm_over_identity;
     result.findings.overlap_unconfirmed =
-        !result.findings.settled_by_dense_search && overlap.sampled > 0 && overlap.transformed < options.confirm_below;
+        !result.findings.settled_by_dense_search && overlap.sampled > 0 && (low_overlap || near_identity_overlap);
     if (was_ok && result.findings.fits_worse_than_identity) {
       std::ostringstream why;
       why.precision(2);
@@ -422,8 +426,10 @@ void check_overlap_against(RegistrationResult& result, const PointCloud& source,
     } else if (was_ok && result.findings.overlap_unconfirmed) {
       std::ostringstream why;
       why.precision(2);
-      why << "; " << overlap.transformed << " of the source lands within " << overlap.distance << " m of the target, below "
-          << options.confirm_below << ": the dense search must confirm it";
+      why << "; " << overlap.transformed << " of the source lands within " << overlap.distance << " m of the target, ";
+      if (low_overlap) why << "below " << options.confirm_below;
+      else why << "less than " << options.confirm_over_identity << " more than the " << overlap.identity << " left where it is";
+      why << ": the dense search must confirm it";
       result.message += why.str();
     }
     // Only an `ok` answer is demoted here; any other status stands as it is.

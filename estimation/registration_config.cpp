@@ -155,6 +155,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::isolation_cell>("ambiguity.isolation_cell", "the checks leave out points with no other point in their cube of this edge or the 26 around it, m (0: keep every point)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::isolation_neighbours>("ambiguity.isolation_neighbours", "the checks leave out points with fewer than this many other points in their isolation cube or the 26 around (at least 1)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::confirm_below>("ambiguity.confirm_below", "an ok answer landing less than this fraction of the source is ok only once the dense search settles it, fraction (0: off)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::confirm_over_identity>("ambiguity.confirm_over_identity", "an ok answer landing less than this fraction of the source more than the unmoved source is ok only once the dense search settles it (0: off)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_margin>("ambiguity.half_turn_margin", "an ok answer must out-overlap the best optimum reached from its half turn about the up axis by this, fraction (negative: no check)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::adopt_icp_optimum>("ambiguity.adopt_icp_optimum", "an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_samples>("ambiguity.half_turn_samples", "source points the half-turn check's ICP aligns, points (>= 6)"),
@@ -443,6 +444,9 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
     }
     if (!(options.ambiguity.confirm_below >= 0.0 && options.ambiguity.confirm_below <= 1.0))
       throw Error("ambiguity.confirm_below must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.confirm_below));
+    if (!(options.ambiguity.confirm_over_identity >= 0.0 && options.ambiguity.confirm_over_identity <= 1.0))
+      throw Error("ambiguity.confirm_over_identity must be a fraction in [0, 1], got " +
+                  std::to_string(options.ambiguity.confirm_over_identity));
   } catch (const Error& error) {
     throw file_error(path, error.what());
   }

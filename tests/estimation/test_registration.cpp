@@ -230,7 +230,11 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   right.source_model.ground_normal = Eigen::Vector3d::UnitZ();
   right.source_model.ground_offset = 1.73;
   right.timings_ms["total"] = 10.0;
-  check_overlap(right, source, target, AmbiguityOptions{});
+  // Scans this close land as much unmoved as aligned, so even the truth would wait for the dense
+  // search (confirm_over_identity; the next test): this test looks at the other guards.
+  AmbiguityOptions guards;
+  guards.confirm_over_identity = 0.0;
+  check_overlap(right, source, target, guards);
   ASSERT_TRUE(right.overlap.has_value());
   EXPECT_EQ(right.status, RegistrationStatus::Ok);
   EXPECT_GT(right.overlap->transformed, 0.9);
@@ -243,7 +247,7 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   wrong.status = RegistrationStatus::Ok;
   wrong.message = "candidate of level 0";
   wrong.transform = Eigen::Translation3d(8.0, 0.0, 0.0) * truth;
-  check_overlap(wrong, source, target, AmbiguityOptions{});
+  check_overlap(wrong, source, target, guards);
   EXPECT_LT(wrong.overlap->transformed, wrong.overlap->identity - 0.15);
   EXPECT_EQ(wrong.status, RegistrationStatus::Ambiguous);
   EXPECT_NE(wrong.message.find("left where it is"), std::string::npos) << wrong.message;
@@ -255,13 +259,13 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   slightly_worse.status = RegistrationStatus::Ok;
   slightly_worse.message = "candidate of level 0";
   slightly_worse.transform = Eigen::Translation3d(0.3, 0.0, 0.0) * truth;  // 0.93 of the source against 0.998 unmoved
-  check_overlap(slightly_worse, source, target, AmbiguityOptions{});
+  check_overlap(slightly_worse, source, target, guards);
   ASSERT_LT(slightly_worse.overlap->transformed, slightly_worse.overlap->identity);
   ASSERT_GT(slightly_worse.overlap->transformed, slightly_worse.overlap->identity - 0.15);
   ASSERT_GT(slightly_worse.overlap->transformed, AmbiguityOptions{}.minimum_overlap);
   EXPECT_EQ(slightly_worse.status, RegistrationStatus::Ambiguous) << slightly_worse.message;
   // The floor alone (margin switched off) demotes it too: it puts less than 40% of the source on the target.
-  AmbiguityOptions floor_only;
+  AmbiguityOptions floor_only = guards;
   floor_only.overlap_margin = -1.0;
   ASSERT_LT(wrong.overlap->transformed, floor_only.minimum_overlap);
   wrong.status = RegistrationStatus::Ok;
@@ -271,7 +275,7 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   EXPECT_NE(wrong.message.find("below the floor of 0.4"), std::string::npos) << wrong.message;
   // With the margin and the floor off, an answer landing less than confirm_below still waits for
   // the dense search.
-  AmbiguityOptions off;
+  AmbiguityOptions off = guards;
   off.overlap_margin = -1.0;
   off.minimum_overlap = 0.0;
   wrong.status = RegistrationStatus::Ok;
@@ -280,14 +284,14 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   EXPECT_EQ(wrong.status, RegistrationStatus::Ambiguous);
   EXPECT_TRUE(wrong.findings.overlap_unconfirmed);
   EXPECT_NE(wrong.message.find("the dense search must confirm it"), std::string::npos) << wrong.message;
-  // All three checks switched off (negative margin, zero floor, zero confirm_below), or an answer
+  // All four checks switched off (negative margin, zero floor, zero confirm_below and confirm_over_identity), or an answer
   // already not `ok`, stays as it is.
   off.confirm_below = 0.0;
   wrong.status = RegistrationStatus::Ok;
   check_overlap(wrong, source, target, off);
   EXPECT_EQ(wrong.status, RegistrationStatus::Ok);
   wrong.status = RegistrationStatus::Degenerate;
-  check_overlap(wrong, source, target, AmbiguityOptions{});
+  check_overlap(wrong, source, target, guards);
   EXPECT_EQ(wrong.status, RegistrationStatus::Degenerate);
   // verify_registration: the guard demotes a wrong `ok` 6 m off, and the dense search then settles
   // it (the truth lies inside its grid: 7 m along the weakest direction, 5 m across).
@@ -324,6 +328,60 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   EXPECT_TRUE(beyond.findings.replaced_by_half_turn) << beyond.message;
   EXPECT_EQ(beyond.status, RegistrationStatus::Ok) << beyond.message;
   EXPECT_LT(translation_error(beyond.transform, truth), 0.1) << beyond.message;
+}
+
+// An answer that moves the source without landing more of it than not moving: on this street the
+// poles stand every 2.5 m, so not moving, 2.5 m short of the truth, lands pole on pole and facade on
+// facade. With confirm_below at the floor (so that only the rule under test acts), the other guards
+// pass it: it is not worse than not moving and above the floor. confirm_over_identity sends it to
+// the dense search, which finds the truth. A scan that barely moved pays for the same search and
+// keeps its `ok`.
+TEST(VerifyRegistration, AnOkAnswerLandingNoMoreThanNotMovingWaitsForTheDenseSearch) {
+  const std::vector<Eigen::Vector3d> world = make_street_world(13);
+  const Eigen::Isometry3d source_pose = make_pose(0.0, {-0.15, 0.0, 1.73});
+  const auto answer_for = [&](const Eigen::Isometry3d& transform) {
+    RegistrationResult answer;
+    answer.status = RegistrationStatus::Ok;
+    answer.message = "candidate of level 0";
+    answer.transform = transform;
+    answer.source_model.has_ground = answer.target_model.has_ground = true;
+    answer.source_model.ground_normal = answer.target_model.ground_normal = Eigen::Vector3d::UnitZ();
+    answer.source_model.ground_offset = answer.target_model.ground_offset = 1.73;
+    return answer;
+  };
+  const Eigen::Isometry3d target_pose = make_pose(0.0, {2.35, 0.0, 1.73});
+  const PointCloud source = observe(world, source_pose), target = observe(world, target_pose);
+  const Eigen::Isometry3d truth = target_pose.inverse() * source_pose;
+  ASSERT_GT(translation_error(Eigen::Isometry3d::Identity(), truth), 2.0);  // not moving is a wrong answer
+  RegistrationOptions options;
+  options.ambiguity.confirm_below = options.ambiguity.minimum_overlap;
+  AmbiguityOptions without = options.ambiguity;
+  without.confirm_over_identity = 0.0;
+  RegistrationResult unchecked = answer_for(Eigen::Isometry3d::Identity());
+  check_overlap(unchecked, source, target, without);
+  ASSERT_GT(unchecked.overlap->transformed, without.minimum_overlap) << unchecked.message;
+  EXPECT_EQ(unchecked.status, RegistrationStatus::Ok) << "without the rule the wrong answer would be ok: " << unchecked.message;
+  RegistrationResult checked = answer_for(Eigen::Isometry3d::Identity());
+  check_overlap(checked, source, target, options.ambiguity);
+  EXPECT_EQ(checked.status, RegistrationStatus::Ambiguous) << checked.message;
+  EXPECT_TRUE(checked.findings.overlap_unconfirmed);
+  EXPECT_NE(checked.message.find("left where it is: the dense search must confirm it"), std::string::npos) << checked.message;
+  RegistrationResult verified = answer_for(Eigen::Isometry3d::Identity());
+  verify_registration(verified, source, target, options);
+  ASSERT_TRUE(verified.dense_search.has_value()) << verified.message;
+  EXPECT_FALSE(verified.status == RegistrationStatus::Ok && translation_error(verified.transform, truth) > 2.0)
+      << "ok and wrong: " << verified.message;
+  EXPECT_EQ(verified.status, RegistrationStatus::Ok) << verified.message;
+  EXPECT_LT(translation_error(verified.transform, truth), 0.1) << verified.message;
+  // A scan 0.1 m from the other: the truth lands no more than not moving, waits, and is settled.
+  const Eigen::Isometry3d still_pose = make_pose(0.0, {-0.05, 0.0, 1.73});
+  const PointCloud still_target = observe(world, still_pose);
+  const Eigen::Isometry3d still_truth = still_pose.inverse() * source_pose;
+  RegistrationResult still = answer_for(still_truth);
+  verify_registration(still, source, still_target, options);
+  EXPECT_TRUE(still.dense_search.has_value()) << still.message;
+  EXPECT_EQ(still.status, RegistrationStatus::Ok) << still.message;
+  EXPECT_LT(translation_error(still.transform, still_truth), 0.1) << still.message;
 }
 
 // The half-turn check on a synthetic street pair 30 m apart with opposite headings: the true answer

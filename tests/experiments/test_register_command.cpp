@@ -223,6 +223,7 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("negative_isolation.yaml", "extraction:\n  isolation_cell: -0.3\n", "extraction.isolation_cell must be a length >= 0");
   expect_error_naming("no_neighbours.yaml", "extraction:\n  isolation_neighbours: 0\n", "extraction.isolation_neighbours must be at least 1");
   expect_error_naming("no_check_neighbours.yaml", "ambiguity:\n  isolation_neighbours: 0\n", "ambiguity.isolation_neighbours must be at least 1");
+  expect_error_naming("gain_above_one.yaml", "ambiguity:\n  confirm_over_identity: 1.5\n", "ambiguity.confirm_over_identity must be a fraction in [0, 1]");
   RegistrationOptions ignored;
   EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
   EXPECT_THROW(registration_preset("hdl999"), Error);
