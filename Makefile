@@ -99,7 +99,8 @@ train-fitter: configure
 # Regenerates papers/quadricsreg/ (results/ and the page README.md) from a clean build: `quadrix bench`
 # on every pair of $(DATA_DIR)/pairs.tsv with every method, the six KITTI loop closures under random yaw
 # (--yaw-range 180 --trials 10), one run per row of the paper's ablation table, the synthetic
-# loop-closure validation set, the shared KITTI frames paired 20-50 m apart under random yaw, and the
+# loop-closure validation set (HDL-64E, and the same streets scanned by a VLP-16), the shared KITTI
+# frames paired 20-50 m apart under random yaw, and the
 # labelled KITTI pair with and without classes, then `quadrix paper`.
 # Several CPU-minutes on 2 cores.
 DATA_DIR ?= ../shared/data
@@ -113,6 +114,9 @@ ABLATION_TRIALS ?= 3
 # The synthetic loop-closure validation set (docs/benchmark.md), generated into the build tree, and
 # the one real pair that has labels on both sides, both run without and with the given classes.
 LOOP_CLOSURE_SET = $(BUILD_DIR)/loop_closures/validation
+# The same streets scanned by a simulated VLP-16: the verification's thresholds were set on
+# HDL-64E-like scans, and this run shows what they let through on a sparse sensor.
+LOOP_CLOSURE_SET_VLP16 = $(BUILD_DIR)/loop_closures/validation-vlp16
 # The shared KITTI-00 frames as a KITTI layout (links, no copies), so `quadrix bench --kitti` can pair
 # every two of them 20-50 m apart with the ground truth of the shared poses.
 KITTI_LAYOUT = $(BUILD_DIR)/kitti_layout
@@ -145,6 +149,10 @@ papers: build
 	$(BUILD_DIR)/bin/quadrix bench --pairs $(LOOP_CLOSURE_SET)/pairs.tsv --method quadrix --yaw-range 180 --seed 3 --labels \
 	  --jobs $(JOBS) --no-progress --title "Synthetic loop closures (validation set, seeds 2001-2005), random yaw, simulator labels" \
 	  --out $(PAPER_DIR)/results/lc-validation-labels
+	$(BUILD_DIR)/bin/quadrix synth loop-closures --seed 2001 --streets 5 --pairs-per-bin 20 --sensor vlp16 --out $(LOOP_CLOSURE_SET_VLP16)
+	$(BUILD_DIR)/bin/quadrix bench --pairs $(LOOP_CLOSURE_SET_VLP16)/pairs.tsv --method quadrix --jobs $(JOBS) --no-progress \
+	  --title "Synthetic loop closures scanned by a VLP-16 (validation seeds 2001-2005), no labels" \
+	  --out $(PAPER_DIR)/results/lc-validation-vlp16
 	printf 'id\tsource\ttarget\tgt\tgt_quality\tsensor\tkind\tt_m\trot_deg\tsource_labels\ttarget_labels\n' > $(LABELLED_PAIRS)
 	awk -F'\t' -v data=$(abspath $(DATA_DIR)) 'BEGIN { OFS = "\t" } $$1 == "kitti00_odo_52_88" { \
 	  $$2 = data "/" $$2; $$3 = data "/" $$3; $$4 = data "/" $$4; \
