@@ -92,6 +92,7 @@ RegistrationStatus decide_registration_status(const RegistrationFindings& findin
   if (findings.estimation_failure) return *findings.estimation_failure;
   const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
   const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little && !findings.half_turn_rival &&
+                    !findings.half_turn_unclear &&
                     !findings.overlap_unconfirmed;
   return sure && fits ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
 }
@@ -607,6 +608,7 @@ void settle_with_dense_search(RegistrationResult& result, const PointCloud& sour
   result.findings.overlaps_too_little = false;
   result.findings.overlap_unconfirmed = false;
   result.findings.half_turn_rival = false;
+  result.findings.half_turn_unclear = false;
   decide(result);
 }
 
@@ -676,6 +678,10 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
     }
     result.half_turn = check;
     result.findings.half_turn_rival = check.has_rival && check.rival_overlap > check.answer_overlap - ambiguity.half_turn_margin;
+    // A sparse sensor's mirror image can out-overlap the truth (docs/registration.md, known
+    // failures): its preset asks an `ok` answer to beat the rival by more.
+    result.findings.half_turn_unclear =
+        !result.findings.half_turn_rival && check.has_rival && check.rival_overlap > check.answer_overlap - ambiguity.half_turn_ok_margin;
     // A rival that beats the answer by the margin, and lands enough of the source to be settled by
     // the dense search's own rule, takes its place.
     const bool replaced = may_replace && check.has_rival && check.rival_overlap >= check.answer_overlap + ambiguity.half_turn_margin &&
@@ -691,6 +697,8 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
       why << ": the rival fits better by more than the margin " << ambiguity.half_turn_margin << " and replaces the answer";
     else if (result.findings.half_turn_rival)
       why << ": within the margin " << ambiguity.half_turn_margin << ", not sure";
+    else if (result.findings.half_turn_unclear)
+      why << ": within the margin " << ambiguity.half_turn_ok_margin << " an ok answer needs here, not sure";
     result.message += why.str();
     if (!replaced && !result.findings.half_turn_rival && ambiguity.adopt_icp_optimum && answer.refined) {
       // The answer stands: its own ICP optimum (refined on all samples) replaces it, which removes

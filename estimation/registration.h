@@ -73,6 +73,7 @@ struct AmbiguityOptions {
   double isolation_cell = 0.3;                ///< the checks (overlap, half turn, correlation over the ground, dense search) leave out points with no other point in their cube of this edge or the 26 around it, m (without_isolated_points; 0: keep every point)
   int isolation_neighbours = 1;               ///< ... or with fewer than this many other points there (at least 1)
   double half_turn_margin = 0.03;             ///< an `ok` answer must put more of the source on the target than the best ICP optimum reached from its half turn (check_half_turn), by this fraction, else `ambiguous` (negative: no check)
+  double half_turn_ok_margin = 0.03;         ///< an `ok` answer must also out-overlap that rival by this fraction, else `ambiguous` (the answer is kept; below half_turn_margin it has no effect). The vlp16 preset: 0.18, set on the VLP-16 tuning set, whose 35 `ok` and wrong mirror images beat their rival by at most 0.172
   bool adopt_icp_optimum = true;              ///< an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it
   std::size_t half_turn_samples = 1500;       ///< source points the half-turn check's ICP aligns (dense_search.source_samples, 3,000, is for settling): half as many cut the check from about 100 to 80 ms a KITTI pair and changed no status on the loop-closure sets or pairs.tsv (docs/registration.md)
   std::size_t half_turn_votes = 8;            ///< ICP also starts from the half-turned rotation at this many translations the quadrics vote for (the axis of the turn is not known)
@@ -141,6 +142,7 @@ struct RegistrationFindings {
   bool overlap_unconfirmed = false;       ///< the answer lands less than AmbiguityOptions::confirm_below, or less than confirm_over_identity more than not moving, and no dense search has settled it
   bool settled_by_dense_search = false;   ///< the dense search replaced an unsure answer by a clear winner
   bool half_turn_rival = false;           ///< the answer turned half a turn about the up axis fits the points about as well (check_half_turn)
+  bool half_turn_unclear = false;         ///< the answer beats that rival by less than AmbiguityOptions::half_turn_ok_margin
   bool replaced_by_half_turn = false;     ///< the half-turned rival fitted clearly better and became the answer (check_half_turn)
 };
 

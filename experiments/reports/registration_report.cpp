@@ -163,7 +163,7 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                            {"answer_overlap", check.answer_overlap},
                            {"rival_overlap", check.has_rival ? nlohmann::json(check.rival_overlap) : nlohmann::json(nullptr)},
                            {"rival", check.has_rival ? matrix_json(check.rival) : nlohmann::json(nullptr)},
-                           {"demoted", result.findings.half_turn_rival}};
+                           {"demoted", result.findings.half_turn_rival || result.findings.half_turn_unclear}};
   }
   if (context.ground_truth) {
     report["ground_truth"] = {{"transform", matrix_json(*context.ground_truth)},
