@@ -254,7 +254,8 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 /// most source points in space the target occupies, and from the answer itself. An `ok`
 /// answer whose own optimum beats the best disagreeing optimum by less than
 /// `options.ambiguity.half_turn_margin` is demoted to `ambiguous` (findings.half_turn_rival); one
-/// that passes becomes its ICP optimum when `adopt_icp_optimum`. When `may_replace`, an `ok` or
+/// that passes becomes its ICP optimum when `adopt_icp_optimum`, and is still `ambiguous` when it
+/// beats the rival by less than `half_turn_ok_margin` (findings.half_turn_unclear). When `may_replace`, an `ok` or
 /// `ambiguous` answer that the rival beats by the margin, with at least
 /// dense_search.minimum_overlap of the source on the target, is replaced by it
 /// (findings.replaced_by_half_turn) and left `ambiguous` with the old answer as its rival, for
