@@ -100,8 +100,8 @@ train-fitter: configure
 # on every pair of $(DATA_DIR)/pairs.tsv with every method, the six KITTI loop closures under random yaw
 # (--yaw-range 180 --trials 10), one run per row of the paper's ablation table, the synthetic
 # loop-closure validation set (HDL-64E, and the same streets scanned by a VLP-16), the shared KITTI
-# frames paired 20-50 m apart under random yaw, and the
-# labelled KITTI pair with and without classes, then `quadrix paper`.
+# frames paired 20-50 m apart under random yaw, and the labelled KITTI pair with and without
+# classes, then `quadrix paper`.
 # Several CPU-minutes on 2 cores.
 DATA_DIR ?= ../shared/data
 PAPER_DIR = papers/quadricsreg
