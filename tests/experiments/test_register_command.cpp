@@ -4,6 +4,7 @@
 #include "estimation/overlap.h"
 #include "estimation/registration_config.h"
 #include "experiments/reports/registration_report.h"
+#include "experiments/synthetic/synthetic_output.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 #include "test_data.h"
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -352,6 +354,46 @@ TEST(RegistrationConfig, AutoPresetMeasuresTheUpAxisOfTiltedScans) {
     const double error = std::acos(std::clamp(estimate.up.dot(tilt * upright.up), -1.0, 1.0)) * 180.0 / M_PI;
     EXPECT_LT(error, 2.0) << degrees << " deg tilt: " << estimate.reason;
     EXPECT_NEAR(estimate.tilt_degrees, std::abs(degrees), 3.0) << estimate.reason;
+  }
+}
+
+// Unit normal of the road (label 40) points of a simulated scan, oriented up: the ground truth
+// of the up axis in the sensor frame.
+Eigen::Vector3d road_normal(const PointCloud& scan) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  double count = 0.0;
+  for (std::size_t i = 0; i < scan.size(); ++i)
+    if (scan.labels[i] == static_cast<std::uint32_t>(SemanticLabel::Road)) {
+      sum += scan.point(i);
+      outer += scan.point(i) * scan.point(i).transpose();
+      count += 1.0;
+    }
+  const Eigen::Vector3d mean = sum / count;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(outer / count - mean * mean.transpose());
+  const Eigen::Vector3d normal = solver.eigenvectors().col(0);
+  return normal.z() < 0.0 ? Eigen::Vector3d(-normal) : normal;
+}
+
+TEST(RegistrationConfig, AutoUpAxisFollowsTheGroundOfSimulatedStreetsForEverySensor) {
+  // A 16-ring scanner's ground voxels mostly hold one scan line each, whose PCA normal leans by the
+  // beam's elevation: the mean of voxel normals came out 2-9 deg off on every such scan. The up
+  // axis is now fitted to the points of the fullest plane; on 137 scans of the tuning set it is
+  // within 1.2 deg of the road for every sensor (a kerb can tilt it by up to ~1 deg).
+  for (const char* sensor_name : {"vlp16", "hdl64", "livox"}) {
+    const SensorModel sensor = sensor_preset(sensor_name);
+    for (const std::uint64_t seed : {11u, 12u, 13u}) {
+      const Scene scene = make_street_scene(seed);
+      const SyntheticRun run = run_synthetic(scene, sensor, scene.default_lidar_poses, seed);
+      for (const SimulatedScan& scan : run.scans) {
+        const UpDirectionEstimate estimate = estimate_up_direction(scan.cloud);
+        const double error = std::acos(std::clamp(estimate.up.dot(road_normal(scan.cloud)), -1.0, 1.0)) * 180.0 / M_PI;
+        std::printf("%s street %llu: %.2f deg from the road; %s\n", sensor_name, static_cast<unsigned long long>(seed), error,
+                    estimate.reason.c_str());
+        EXPECT_TRUE(estimate.found) << estimate.reason;
+        EXPECT_LT(error, 2.0) << sensor_name << " street " << seed << ": " << estimate.reason;
+      }
+    }
   }
 }
 
