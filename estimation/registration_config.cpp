@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <tbb/parallel_invoke.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -866,24 +867,32 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
   return guess;
 }
 
+RegistrationOptions resolve_registration_side(const std::string& preset, const PointCloud& cloud, const std::string& side,
+                                              std::string* notes) {
+  if (preset != "auto") return registration_preset(preset);
+  const SensorGuess guess = guess_sensor_preset(cloud);
+  RegistrationOptions options = registration_preset(guess.preset);
+  if (guess.up.found) options.source_extraction.up = options.target_extraction.up = guess.up.up;
+  if (guess.near_field_fraction > 0.1)  // self-hits of the platform: crop them (its preset's value when larger)
+    options.source_extraction.minimum_range = options.target_extraction.minimum_range =
+        std::max(guess.minimum_range, options.source_extraction.minimum_range);
+  if (notes != nullptr) *notes += (notes->empty() ? "" : "; ") + side + " auto: " + guess.reason + "; " + guess.up.reason;
+  return options;
+}
+
 RegistrationOptions resolve_registration_options(const std::string& source_preset, const PointCloud& source,
                                                  const std::string& target_preset, const PointCloud& target,
                                                  std::string* notes) {
-  // One side: a named preset's options as they are, or auto's guess with the measured up axis.
-  const auto resolve = [&](const std::string& requested, const PointCloud& cloud, const char* side) {
-    if (requested != "auto") return registration_preset(requested);
-    const SensorGuess guess = guess_sensor_preset(cloud);
-    RegistrationOptions options = registration_preset(guess.preset);
-    if (guess.up.found) options.source_extraction.up = options.target_extraction.up = guess.up.up;
-    if (guess.near_field_fraction > 0.1)  // self-hits of the platform: crop them (its preset's value when larger)
-      options.source_extraction.minimum_range = options.target_extraction.minimum_range =
-          std::max(guess.minimum_range, options.source_extraction.minimum_range);
-    if (notes != nullptr)
-      *notes += std::string(notes->empty() ? "" : "; ") + side + " auto: " + guess.reason + "; " + guess.up.reason;
-    return options;
-  };
-  RegistrationOptions options = resolve(source_preset, source, "source");  // the source side's preset sets the shared stages
-  options.target_extraction = resolve(target_preset, target, "target").target_extraction;
+  // The two sides are measured at the same time (auto: ~30 ms per KITTI scan here), each with its
+  // own notes, joined source first.
+  RegistrationOptions options, target_side;
+  std::string source_notes, target_notes;
+  tbb::parallel_invoke([&] { options = resolve_registration_side(source_preset, source, "source", &source_notes); },
+                       [&] { target_side = resolve_registration_side(target_preset, target, "target", &target_notes); });
+  options.target_extraction = target_side.target_extraction;  // the source side's preset sets the shared stages
+  if (notes != nullptr)
+    for (const std::string* side_notes : {&source_notes, &target_notes})
+      if (!side_notes->empty()) *notes += (notes->empty() ? "" : "; ") + *side_notes;
   return options;
 }
 

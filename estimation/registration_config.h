@@ -116,10 +116,17 @@ struct SensorGuess {
 /// point_count counts every point.
 SensorGuess guess_sensor_preset(const PointCloud& cloud);
 
+/// The options one cloud's preset gives (both extractions set alike): `preset` by name
+/// (registration_preset), or "auto" (guess_sensor_preset, whose estimated up axis and platform crop
+/// are set on the extractions). The reasons of an auto choice are appended to `notes` when given,
+/// after `side` ("source", "target"). Throws quadrix::Error for an unknown preset name.
+RegistrationOptions resolve_registration_side(const std::string& preset, const PointCloud& cloud, const std::string& side,
+                                              std::string* notes = nullptr);
+
 /// Registration options for a pair: each side's preset by name (registration_preset), or "auto"
-/// (guess_sensor_preset, whose estimated up axis is also set on that side's extraction). The
-/// reasons of every auto choice are appended to `notes` when given. Throws quadrix::Error for an
-/// unknown preset name.
+/// (guess_sensor_preset, whose estimated up axis is also set on that side's extraction); the two
+/// sides are resolved concurrently (resolve_registration_side). The reasons of every auto choice are
+/// appended to `notes` when given. Throws quadrix::Error for an unknown preset name.
 RegistrationOptions resolve_registration_options(const std::string& source_preset, const PointCloud& source,
                                                  const std::string& target_preset, const PointCloud& target,
                                                  std::string* notes = nullptr);

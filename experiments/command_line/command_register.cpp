@@ -57,9 +57,11 @@ void run(const RegisterCommandOptions& options) {
   const double load_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 
   std::string notes;
+  const Clock::time_point resolve_start = Clock::now();
   RegistrationOptions registration = resolve_registration_options(
       options.source_preset.empty() ? options.preset : options.source_preset, source,
       options.target_preset.empty() ? options.preset : options.target_preset, target, &notes);
+  const double preset_ms = std::chrono::duration<double, std::milli>(Clock::now() - resolve_start).count();
   if (!options.config.empty()) apply_registration_config(options.config, registration);
   if (!options.refiner.empty()) {
     make_refiner(options.refiner);
@@ -84,9 +86,9 @@ void run(const RegisterCommandOptions& options) {
   const RegistrationCounts& c = result.counts;
   std::string cliques;
   for (const std::size_t size : c.clique_sizes) cliques += (cliques.empty() ? "" : "/") + std::to_string(size);
-  std::printf("status %s | %.0f ms total (load %.0f, model %.0f + %.0f, match %.0f, estimate %.0f, select %.0f) | quadrics %zu/%zu, "
-              "correspondences %zu, cliques %s",
-              registration_status_name(result.status), total_ms, load_ms, result.timings_ms.at("modelling_source"),
+  std::printf("status %s | %.0f ms total (load %.0f, preset %.0f, model %.0f + %.0f, match %.0f, estimate %.0f, select %.0f) | "
+              "quadrics %zu/%zu, correspondences %zu, cliques %s",
+              registration_status_name(result.status), total_ms, load_ms, preset_ms, result.timings_ms.at("modelling_source"),
               result.timings_ms.at("modelling_target"),
               result.timings_ms.at("correspondences") + result.timings_ms.at("graphs") + result.timings_ms.at("cliques"),
               result.timings_ms.at("estimation"), result.timings_ms.at("selection"), c.source_quadrics, c.target_quadrics,

@@ -1,11 +1,17 @@
 // Estimation kernels: refining one candidate with ~100 correspondences (plus augmentation) per
-// backend/algorithm, the quadric distance + Jacobian, and scoring 8 candidates in selection.
+// backend/algorithm, the quadric distance + Jacobian, scoring 8 candidates in selection, and
+// `auto`'s up-axis estimate of one simulated street scan per sensor.
 // Target: Ceres refinement of ~100 correspondences in <= 2 ms.
 #include "estimation/candidate_selection.h"
 #include "estimation/refiner.h"
+#include "estimation/registration_config.h"
+#include "experiments/synthetic/mesh_ray_caster.h"
+#include "experiments/synthetic/scanner_simulator.h"
+#include "geometry/io.h"
 
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
 #include <random>
 
 namespace {
@@ -112,6 +118,49 @@ void BM_SelectAmong8Candidates(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(select_candidate(scene.source, scene.target, candidates).best_index);
 }
 BENCHMARK(BM_SelectAmong8Candidates)->Unit(benchmark::kMillisecond);
+
+// estimate_up_direction on one level scan of street 1: voxel-normal mode, then the fullest plane's
+// points (docs/registration.md, "How auto finds the up axis"). Arg: 0 HDL-64E, 1 VLP-16, 2 Livox.
+void BM_EstimateUpDirection(benchmark::State& state) {
+  const char* sensors[] = {"hdl64", "vlp16", "livox"};
+  const quadrix::Scene street = make_street_scene(1);
+  const RayCaster caster(street);
+  const SimulatedScan scan =
+      simulate_scan(street, caster, sensor_preset(sensors[state.range(0)]), street.default_lidar_poses[0], 1, 0);
+  double tilt = 0.0;
+  for (auto _ : state) {
+    const UpDirectionEstimate estimate = estimate_up_direction(scan.cloud);
+    tilt = estimate.tilt_degrees;
+    benchmark::DoNotOptimize(estimate.up.data());
+  }
+  state.SetLabel(sensors[state.range(0)]);
+  state.counters["points"] = static_cast<double>(scan.cloud.size());
+  state.counters["tilt_deg"] = tilt;
+}
+BENCHMARK(BM_EstimateUpDirection)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+
+// All that `--preset auto` measures on one real KITTI scan (sensor, up axis, crop), and its parts.
+// Skipped when the shared data is absent.
+void BM_GuessSensorPresetKitti(benchmark::State& state) {
+  const std::string path = std::string(QUADRIX_DATA_DIR) + "/kitti00/velodyne/000000.bin";
+  if (!std::filesystem::exists(path)) {
+    state.SkipWithError("shared data absent");
+    return;
+  }
+  const PointCloud cloud = read_point_cloud(path);
+  const PointCloud accompanied = without_isolated_points(cloud, AmbiguityOptions{}.isolation_cell);
+  for (auto _ : state) {
+    switch (state.range(0)) {
+      case 0: benchmark::DoNotOptimize(guess_sensor_preset(cloud).preset.size()); break;
+      case 1: benchmark::DoNotOptimize(without_isolated_points(cloud, AmbiguityOptions{}.isolation_cell).size()); break;
+      default: benchmark::DoNotOptimize(estimate_up_direction(accompanied).up.data()); break;
+    }
+  }
+  const char* labels[] = {"guess_sensor_preset", "without_isolated_points", "estimate_up_direction"};
+  state.SetLabel(labels[state.range(0)]);
+  state.counters["points"] = static_cast<double>(cloud.size());
+}
+BENCHMARK(BM_GuessSensorPresetKitti)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
