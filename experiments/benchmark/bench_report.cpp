@@ -114,9 +114,9 @@ std::string with_method_legend(const std::string& body, const std::vector<Method
 
 // Stage order of the time plot and table: pipeline order, then anything else alphabetically, total last.
 std::vector<std::string> ordered_stages(const std::map<std::string, std::pair<double, double>>& stages) {
-  static const std::vector<std::string> pipeline{"preset",           "modelling_source", "modelling_target", "correspondences", "graphs",
-                                                 "cliques",          "estimation",       "selection",       "downsample",
-                                                 "features",         "matching"};
+  static const std::vector<std::string> pipeline{"preset",    "modelling_source", "modelling_target", "correspondences",
+                                                 "graphs",    "cliques",          "estimation",       "selection",
+                                                 "downsample", "features",        "matching"};
   std::vector<std::string> order;
   for (const std::string& stage : pipeline)
     if (stages.count(stage)) order.push_back(stage);
