@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -189,9 +190,12 @@ TEST(LoopClosureSet, TheTuningSetsFormerMirrorPairIsRightAndItsMirrorAnswerIsNot
 // An `ok` answer 25 m wrong that the floor let through, found on the validation set (street 2004,
 // pass-2 scan 26 against pass-1 scan 15, 25 m apart) under another draw of yaws than the one the
 // set is reported with (`--yaw-range 180 --seed 3` on its 20-30 m rows alone turned the source by
-// 119.22 degrees). The quadric answer lands 0.51 of the source on the target (the truth 0.63),
-// above the floor, and its half turn fits worse, so only AmbiguityOptions::confirm_below sends it to
-// the dense search, whose correlation over the ground starts at the truth. The ratio of the two
+// 119.22 degrees). The quadric answer lands 0.50 of the source on the target (the truth 0.60),
+// above the floor, so AmbiguityOptions::confirm_below sends it to the dense search, whose
+// correlation over the ground starts at the truth. When it was found its half turn fitted worse;
+// since the up axis is fitted to the ground's points the half-turn check catches it too (its rival
+// lands 0.60 against 0.34), so the test switches that check off to keep confirm_below the only
+// guard between this answer and `ok`. The ratio of the two
 // best candidate scores, 0.8501, sits at the edge of score_ratio (0.85): the bench's rotation put
 // it on the `ok` side, so this test moves score_ratio to 0.851 to do the same. It was found with
 // every point in range modelled; leaving the street's few isolated points out of the modelling moves
@@ -204,11 +208,13 @@ TEST(LoopClosureSet, AnOkAnswerLandingLittleOfTheSourceIsConfirmedByTheDenseSear
   RegistrationOptions options = resolve_registration_options("auto", source, "auto", target);
   options.ambiguity.score_ratio = 0.851;
   options.source_extraction.isolation_cell = options.target_extraction.isolation_cell = 0.0;
+  options.ambiguity.half_turn_margin = -1.0;
   for (const double confirm_below : {options.ambiguity.confirm_below, 0.0}) {
     RegistrationOptions tried = options;
     tried.ambiguity.confirm_below = confirm_below;
     const RegistrationResult result = register_clouds(source, target, tried);
     const bool right = registration_succeeded(result.transform, truth);
+    std::printf("confirm_below %.2f: %s\n", confirm_below, result.message.c_str());
     if (confirm_below > 0.0) {
       EXPECT_TRUE(right) << result.message;
       EXPECT_NE(result.message.find("the dense search must confirm it"), std::string::npos) << result.message;
