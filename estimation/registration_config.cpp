@@ -496,7 +496,7 @@ std::string registration_config_yaml(const RegistrationOptions& options, const s
 
 namespace {
 
-// Point statistics of one voxel (count, sum, sum of outer products) for its PCA normal.
+// Point statistics of a set of points (a voxel, a slab): count, sum, sum of outer products, for its PCA normal.
 struct VoxelMoments {
   double count = 0.0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -602,14 +602,9 @@ Eigen::Vector3d settle_on_fullest_plane(const std::vector<Eigen::Vector3d>& poin
   for (std::size_t i = 0; i < points.size(); i += 3) sparse.push_back(points[i]);
   for (std::size_t i = 0; i < points.size(); i += 9) sparser.push_back(points[i]);
   std::vector<std::uint32_t> bins;
-  const std::vector<Eigen::Vector3d>* counted_before = &sparser;
-  std::size_t best_count = fullest_slab(sparser, best, kHalfThickness, reach, bins, &centre);
   for (const auto& [step_degrees, radius_degrees] : {std::pair{1.0, 12.0}, std::pair{0.25, 1.0}, std::pair{0.0625, 0.25}}) {
     const std::vector<Eigen::Vector3d>& counted = step_degrees > 0.5 ? sparser : sparse;
-    if (&counted != counted_before) {  // counts of different samples do not compare
-      best_count = fullest_slab(counted, best, kHalfThickness, reach, bins, &centre);
-      counted_before = &counted;
-    }
+    std::size_t best_count = fullest_slab(counted, best, kHalfThickness, reach, bins, &centre);  // on this grid's sample
     const Eigen::Vector3d around = best;
     const Eigen::Vector3d helper = std::abs(around.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
     const Eigen::Vector3d first = (helper - helper.dot(around) * around).normalized();
@@ -632,18 +627,16 @@ Eigen::Vector3d settle_on_fullest_plane(const std::vector<Eigen::Vector3d>& poin
   }
   Eigen::Vector3d normal = best;
   for (int round = 0; round < 2; ++round) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
-    double count = 0.0;
+    VoxelMoments slab;
     for (const Eigen::Vector3d& p : points)
       if (std::abs(p.dot(normal) - centre) <= kHalfThickness) {
-        sum += p;
-        outer += p * p.transpose();
-        count += 1.0;
+        slab.count += 1.0;
+        slab.sum += p;
+        slab.outer += p * p.transpose();
       }
-    if (count < 3.0) break;
-    const Eigen::Vector3d mean = sum / count;
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(outer / count - mean * mean.transpose());
+    if (slab.count < 3.0) break;
+    const Eigen::Vector3d mean = slab.sum / slab.count;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(slab.outer / slab.count - mean * mean.transpose());
     Eigen::Vector3d fitted = solver.eigenvectors().col(0);
     if (fitted.dot(mode) < 0.0) fitted = -fitted;
     if (fitted.dot(mode) < search_cosine) break;
