@@ -6,6 +6,8 @@
 // and every check do), as scanned and with 30% uniform outliers. Skips with a message when ../shared/data is absent.
 #include "estimation/dense_search.h"
 #include "estimation/ground_correlation.h"
+#include "estimation/registration.h"
+#include "estimation/registration_config.h"
 #include "geometry/io.h"
 #include "geometry/voxel_cells.h"
 
@@ -83,6 +85,34 @@ void BM_CorrelateOverGroundKitti52To88(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(quadrix::correlate_over_ground(source, target, ground, ground).size());
 }
 BENCHMARK(BM_CorrelateOverGroundKitti52To88)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// verify_registration on the `ok` answer register_clouds gives KITTI-00 0 -> 4438 (5.3 m apart,
+// `auto` on both scans): what every `ok` answer pays for its checks. Reports the half-turn check's
+// share as a counter.
+void BM_VerifyOkAnswerKitti0To4438(benchmark::State& state) {
+  const std::string source_path = data_path("kitti00/velodyne/000000.bin"), target_path = data_path("kitti00/velodyne/004438.ply");
+  if (!std::filesystem::exists(source_path) || !std::filesystem::exists(target_path)) {
+    state.SkipWithError(("real data absent: " + source_path).c_str());
+    return;
+  }
+  const quadrix::PointCloud source = quadrix::read_point_cloud(source_path), target = quadrix::read_point_cloud(target_path);
+  const quadrix::RegistrationOptions options = quadrix::resolve_registration_options("auto", source, "auto", target);
+  const quadrix::RegistrationResult registered = quadrix::register_clouds(source, target, options);
+  if (registered.status != quadrix::RegistrationStatus::Ok) {
+    state.SkipWithError(("the pair did not register ok: " + registered.message).c_str());
+    return;
+  }
+  double half_turn_ms = 0.0;
+  for (auto _ : state) {
+    quadrix::RegistrationResult result = registered;
+    result.timings_ms.clear();
+    quadrix::verify_registration(result, source, target, options);
+    half_turn_ms += result.timings_ms["half_turn"];
+    benchmark::DoNotOptimize(result.status);
+  }
+  state.counters["half_turn_ms"] = benchmark::Counter(half_turn_ms / static_cast<double>(state.iterations()));
+}
+BENCHMARK(BM_VerifyOkAnswerKitti0To4438)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // without_isolated_points (geometry/voxel_cells.h) on KITTI-00 frame 52 (121k points), with
 // state.range(0) percent of its point count added uniformly over its bounding box.
