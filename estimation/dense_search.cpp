@@ -17,7 +17,6 @@
 #include <mutex>
 #include <sstream>
 #include <optional>
-#include <unordered_set>
 
 namespace quadrix {
 
@@ -25,14 +24,13 @@ namespace {
 
 // One point per occupied cube of edge `voxel` (the first met), as a 3×N matrix.
 Eigen::Matrix3Xd thin(const PointCloud& cloud, double voxel) {
-  std::unordered_set<std::uint64_t> occupied;
-  occupied.reserve(cloud.size());
+  CellMap<char> occupied(cloud.size() / 2);
   std::vector<Eigen::Vector3d> kept;
   kept.reserve(cloud.size() / 2);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d p = cloud.point(i);
     if (!p.allFinite()) continue;
-    if (occupied.insert(cell_key((p / voxel).array().floor().cast<int>())).second) kept.push_back(p);
+    if (occupied.insert(cell_key((p / voxel).array().floor().cast<int>()))) kept.push_back(p);
   }
   Eigen::Matrix3Xd points(3, static_cast<Eigen::Index>(kept.size()));
   for (std::size_t i = 0; i < kept.size(); ++i) points.col(static_cast<Eigen::Index>(i)) = kept[i];

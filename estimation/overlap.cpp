@@ -8,28 +8,35 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
 namespace quadrix {
 
-TargetCoverage::TargetCoverage(const PointCloud& target, double distance) : distance_(distance), target_size_(target.size()) {
+TargetCoverage::TargetCoverage(const PointCloud& target, double distance)
+    : distance_(distance), target_size_(target.size()), cells_(target.size() / 4 + 1) {
   if (!(distance > 0.0)) throw Error("TargetCoverage: distance must be positive, got " + std::to_string(distance));
-  // The target's points sorted by cell, and each occupied cell's range in that order: one sort and
-  // one map instead of a vector per cell. A neighbour within `distance` lies in one of the 27 cells
-  // around the query's cell.
-  keyed_.reserve(target.size());
+  // The target's points grouped by cell, and each occupied cell's range in that order: a counting
+  // sort (count per cell, then place) instead of a vector per cell. A neighbour within `distance`
+  // lies in one of the 27 cells around the query's cell.
+  std::vector<std::uint64_t> keys(target.size(), 0);
+  std::vector<char> finite(target.size(), 0);
   for (std::size_t i = 0; i < target.size(); ++i) {
     const Eigen::Vector3d p = target.point(i);
-    if (p.allFinite()) keyed_.push_back({cell_key(cell_of(p)), p.cast<float>(), static_cast<std::uint32_t>(i)});
+    if (!p.allFinite()) continue;
+    finite[i] = 1;
+    keys[i] = cell_key(cell_of(p));
+    ++cells_[keys[i]].second;
   }
-  std::sort(keyed_.begin(), keyed_.end(), [](const KeyedPoint& a, const KeyedPoint& b) { return a.key < b.key; });
-  cells_.reserve(keyed_.size() / 4 + 1);
-  for (std::size_t begin = 0, end = 0; begin < keyed_.size(); begin = end) {
-    for (end = begin + 1; end < keyed_.size() && keyed_[end].key == keyed_[begin].key;) ++end;
-    cells_.emplace(keyed_[begin].key, std::make_pair(static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)));
-  }
+  std::uint32_t placed = 0;
+  cells_.for_each([&](std::uint64_t, std::pair<std::uint32_t, std::uint32_t>& range) {
+    const std::uint32_t count = range.second;
+    range = {placed, placed};  // `second` is the fill cursor below, then the end
+    placed += count;
+  });
+  keyed_.resize(placed);
+  for (std::size_t i = 0; i < target.size(); ++i)
+    if (finite[i]) keyed_[cells_[keys[i]].second++] = {target.point(i).cast<float>(), static_cast<std::uint32_t>(i)};
 }
 
 std::vector<Eigen::Index> TargetCoverage::leave_out_isolated_points(int neighbours) {
@@ -38,24 +45,24 @@ std::vector<Eigen::Index> TargetCoverage::leave_out_isolated_points(int neighbou
   // make up the rest. Decide every such cell first, then erase: erasing one must not make its
   // neighbour look isolated.
   const auto points_in = [this](std::uint64_t key) -> std::uint32_t {
-    const auto found = cells_.find(key);
-    return found == cells_.end() ? 0u : found->second.second - found->second.first;
+    const std::pair<std::uint32_t, std::uint32_t>* found = cells_.find(key);
+    return found ? found->second - found->first : 0u;
   };
   const std::uint32_t wanted = static_cast<std::uint32_t>(neighbours);
   std::vector<std::uint64_t> isolated;
-  for (const auto& [key, range] : cells_) {
+  cells_.for_each([&](std::uint64_t key, const std::pair<std::uint32_t, std::uint32_t>& range) {
     const std::uint32_t in_own_cell = range.second - range.first;
-    if (in_own_cell > wanted) continue;
+    if (in_own_cell == 0 || in_own_cell > wanted) return;  // empty: left out before
     const Eigen::Vector3i cell = cell_of(keyed_[range.first].position.cast<double>());
     if (!has_enough_company(cell, in_own_cell - 1, wanted, points_in)) isolated.push_back(key);
-  }
+  });
   // Every hashed point is kept but those of the isolated cells, listed in the target's order.
   std::vector<char> keep(target_size_, 0);
   for (const KeyedPoint& point : keyed_) keep[point.index] = 1;
   for (const std::uint64_t key : isolated) {
-    const auto range = cells_.at(key);
+    std::pair<std::uint32_t, std::uint32_t>& range = cells_[key];
     for (std::uint32_t k = range.first; k < range.second; ++k) keep[keyed_[k].index] = 0;
-    cells_.erase(key);
+    range.second = range.first;  // covers nothing from now on
   }
   std::vector<Eigen::Index> kept;
   kept.reserve(keyed_.size());
@@ -75,9 +82,9 @@ bool TargetCoverage::covers(const Eigen::Vector3d& point) const {
   for (int dx = -1; dx <= 1; ++dx)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dz = -1; dz <= 1; ++dz) {
-        const auto found = cells_.find(cell_key(c + Eigen::Vector3i(dx, dy, dz)));
-        if (found == cells_.end()) continue;
-        for (std::uint32_t k = found->second.first; k < found->second.second; ++k)
+        const std::pair<std::uint32_t, std::uint32_t>* found = cells_.find(cell_key(c + Eigen::Vector3i(dx, dy, dz)));
+        if (!found) continue;
+        for (std::uint32_t k = found->first; k < found->second; ++k)
           if ((keyed_[k].position - query).squaredNorm() <= squared) return true;
       }
   return false;

@@ -11,7 +11,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -35,17 +34,16 @@ class TargetCoverage {
   std::vector<Eigen::Index> leave_out_isolated_points(int neighbours = 1);
 
  private:
-  /// A hashed target point: its cell's key, its position and its index in the target.
+  /// A hashed target point: its position and its index in the target.
   struct KeyedPoint {
-    std::uint64_t key;
     Eigen::Vector3f position;
     std::uint32_t index;
   };
   Eigen::Vector3i cell_of(const Eigen::Vector3d& point) const;
   double distance_;
   std::size_t target_size_;                                                           // points of the target, hashed or not
-  std::vector<KeyedPoint> keyed_;                                                     // target points sorted by cell key
-  std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> cells_;  // key -> [begin, end) in keyed_
+  std::vector<KeyedPoint> keyed_;                                        // target points grouped by cell
+  CellMap<std::pair<std::uint32_t, std::uint32_t>> cells_;               // key -> [begin, end) in keyed_ (empty once left out)
 };
 
 /// How much of the source lands on the target, for pairs without ground truth: the fraction of

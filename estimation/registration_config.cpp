@@ -513,31 +513,27 @@ struct PlanarVoxel {
 // PCA normals of the planar voxels of (at most ~100 k evenly strided points of) the cloud.
 std::vector<PlanarVoxel> planar_voxels(const PointCloud& cloud, double voxel_size) {
   const std::size_t stride = std::max<std::size_t>(1, cloud.size() / 100000);
-  std::unordered_map<std::int64_t, VoxelMoments> voxels;
+  CellMap<VoxelMoments> voxels(cloud.size() / stride / 8);
   for (std::size_t i = 0; i < cloud.size(); i += stride) {
     const Eigen::Vector3d p = cloud.point(i);
     if (!p.allFinite()) continue;
     const Eigen::Vector3d cell = (p / voxel_size).array().floor();
-    if ((cell.array().abs() > 1e5).any()) continue;
-    const std::int64_t key = (static_cast<std::int64_t>(cell.x()) + (1 << 20)) * (std::int64_t{1} << 42) +
-                             (static_cast<std::int64_t>(cell.y()) + (1 << 20)) * (std::int64_t{1} << 21) +
-                             (static_cast<std::int64_t>(cell.z()) + (1 << 20));
-    VoxelMoments& voxel = voxels[key];
+    if ((cell.array().abs() > 1e5).any()) continue;  // within cell_key's 21 bits an axis
+    VoxelMoments& voxel = voxels[cell_key(cell.cast<int>())];
     voxel.count += 1.0;
     voxel.sum += p;
     voxel.outer += p * p.transpose();
   }
   std::vector<PlanarVoxel> planar;
-  for (const auto& [key, voxel] : voxels) {
-    (void)key;
-    if (voxel.count < 8.0) continue;
+  voxels.for_each([&](std::uint64_t, const VoxelMoments& voxel) {
+    if (voxel.count < 8.0) return;
     const Eigen::Vector3d mean = voxel.sum / voxel.count;
     const Eigen::Matrix3d covariance = voxel.outer / voxel.count - mean * mean.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
     const Eigen::Vector3d values = solver.eigenvalues();  // ascending
-    if (!(values(1) > 0.0) || values(0) > 0.04 * values(1) || values(1) < 0.01 * values(2)) continue;  // a patch, not a line
+    if (!(values(1) > 0.0) || values(0) > 0.04 * values(1) || values(1) < 0.01 * values(2)) return;  // a patch, not a line
     planar.push_back({solver.eigenvectors().col(0), mean, voxel.count});
-  }
+  });
   // Hash-map order is not deterministic across library versions: sort for reproducible candidates.
   std::sort(planar.begin(), planar.end(), [](const PlanarVoxel& a, const PlanarVoxel& b) {
     return std::tie(a.center.x(), a.center.y(), a.center.z()) < std::tie(b.center.x(), b.center.y(), b.center.z());
@@ -555,22 +551,34 @@ double normal_support(const std::vector<PlanarVoxel>& voxels, const Eigen::Vecto
 
 // Points in the fullest slab of thickness 2 * `half_thickness` perpendicular to `normal`:
 // offsets along `normal` (those within `reach` of the origin) are binned at `half_thickness` and the
-// heaviest pair of adjacent bins wins. Returns the count and writes the slab's centre offset. An
-// array, not a hash map: this runs for ~200 directions per cloud.
+// heaviest pair of adjacent bins wins (the lowest on a tie). Returns the count and writes the
+// slab's centre offset. An array, not a hash map: this runs for ~550 directions per cloud. `bins`
+// must hold zeros on entry and is left so; only the bins the points reach are scanned and cleared
+// (on a street scan ~150 of the ~2,400 a 120 m reach spans).
 std::size_t fullest_slab(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& normal, double half_thickness,
                          double reach, std::vector<std::uint32_t>& bins, double* centre) {
   const std::size_t bin_count = static_cast<std::size_t>(std::ceil(2.0 * reach / half_thickness)) + 2;
-  bins.assign(bin_count, 0);
+  if (bins.size() < bin_count) bins.resize(bin_count, 0);
+  std::size_t lowest = bin_count, highest = 0;
   for (const Eigen::Vector3d& p : points) {
     const double offset = p.dot(normal);
-    if (std::abs(offset) < reach) ++bins[static_cast<std::size_t>((offset + reach) / half_thickness)];
+    if (std::abs(offset) < reach) {
+      const std::size_t bin = static_cast<std::size_t>((offset + reach) / half_thickness);
+      ++bins[bin];
+      lowest = std::min(lowest, bin);
+      highest = std::max(highest, bin);
+    }
   }
   std::size_t best = 0, best_bin = 0;
-  for (std::size_t bin = 0; bin + 1 < bin_count; ++bin)
-    if (bins[bin] + bins[bin + 1] > best) {
-      best = bins[bin] + bins[bin + 1];
-      best_bin = bin;
-    }
+  if (lowest <= highest) {
+    // Pairs beyond [lowest - 1, highest] hold nothing and never beat an occupied one.
+    for (std::size_t bin = lowest > 0 ? lowest - 1 : 0; bin <= highest && bin + 1 < bin_count; ++bin)
+      if (bins[bin] + bins[bin + 1] > best) {
+        best = bins[bin] + bins[bin + 1];
+        best_bin = bin;
+      }
+    std::fill(bins.begin() + static_cast<std::ptrdiff_t>(lowest), bins.begin() + static_cast<std::ptrdiff_t>(highest) + 1, 0u);
+  }
   *centre = static_cast<double>(best_bin + 1) * half_thickness - reach;
   return best;
 }

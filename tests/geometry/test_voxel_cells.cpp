@@ -1,5 +1,6 @@
 // The isolated-point rule (geometry/voxel_cells.h) on hand-placed points whose answer is known,
-// and on a scanned surface with uniform strays added.
+// and on a scanned surface with uniform strays added; the flat cell map against std::map on random
+// cells.
 #include "geometry/voxel_cells.h"
 
 #include "geometry/error.h"
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <map>
 #include <set>
 
 namespace quadrix {
@@ -20,6 +22,44 @@ TEST(VoxelCells, NeighbouringCellsHaveDistinctKeysOnBothSidesOfZero) {
     for (int y = -2; y <= 2; ++y)
       for (int z = -2; z <= 2; ++z) keys.insert(cell_key(Eigen::Vector3i(x, y, z)));
   EXPECT_EQ(keys.size(), 125u);
+}
+
+TEST(VoxelCells, TheCellMapHoldsWhatAnOrderedMapHoldsThroughEveryGrowth) {
+  // Cells clustered like a scan's (neighbours share high key bits) and some far apart; the map
+  // starts small so it grows many times. Every insertion, count and lookup must match std::map.
+  std::mt19937 random(7);
+  std::uniform_int_distribution<int> near(-40, 40), far(-1000000, 1000000);
+  CellMap<std::uint32_t> counts(4);
+  std::map<std::uint64_t, std::uint32_t> reference;
+  for (int k = 0; k < 60000; ++k) {
+    const Eigen::Vector3i cell = k % 10 == 0 ? Eigen::Vector3i(far(random), far(random), far(random))
+                                             : Eigen::Vector3i(near(random), near(random), near(random) / 8);
+    const std::uint64_t key = cell_key(cell);
+    const bool absent = reference.find(key) == reference.end();
+    if (k % 3 == 0) {
+      EXPECT_EQ(counts.insert(key), absent);
+      reference[key];
+    } else {
+      ++counts[key];
+      ++reference[key];
+    }
+  }
+  EXPECT_EQ(counts.size(), reference.size());
+  for (const auto& [key, count] : reference) {
+    const std::uint32_t* found = counts.find(key);
+    ASSERT_NE(found, nullptr);
+    EXPECT_EQ(*found, count);
+  }
+  std::size_t visited = 0;
+  counts.for_each([&](std::uint64_t key, std::uint32_t count) {
+    ++visited;
+    EXPECT_EQ(reference.at(key), count);
+  });
+  EXPECT_EQ(visited, reference.size());
+  for (int x = 41; x < 1000; ++x) {  // beyond the clustered cells: absent unless a far draw hit it
+    const std::uint64_t key = cell_key(Eigen::Vector3i(x, 0, 0));
+    EXPECT_EQ(counts.find(key) != nullptr, reference.count(key) == 1);
+  }
 }
 
 TEST(VoxelCells, APointIsKeptWhenAnotherCandidateLiesInItsCubeOrTheTwentySixAround) {
