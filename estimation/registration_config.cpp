@@ -734,7 +734,7 @@ UpDirectionEstimate estimate_up_direction(const PointCloud& cloud) {
 
 namespace {
 
-// Rings: maximal runs of occupied elevation bins separated by empty bins, among the sorted
+// Rings: maximal runs of occupied elevation bins separated by empty bins, among the
 // elevations between `low` and `high` (degrees). Bins are 0.05 deg, wider for sparse clouds so that
 // they hold at least ~20 points on average; a bin is occupied when it holds more than half the mean
 // count (ring bins hold many times the mean, while a non-repetitive scanner fills the span evenly).
@@ -781,9 +781,13 @@ void measure_sensor_geometry(const PointCloud& cloud, SensorGuess& guess) {
   std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2), ranges.end());
   guess.median_range = ranges[ranges.size() / 2];
   if (elevations.size() < 100) return;
-  std::sort(elevations.begin(), elevations.end());
-  const double low = elevations[elevations.size() / 100];
-  const double high = elevations[elevations.size() * 99 / 100];
+  // The 1st and 99th percentiles by selection, not a full sort (the ring histogram needs no order).
+  const auto low_at = elevations.begin() + static_cast<std::ptrdiff_t>(elevations.size() / 100);
+  const auto high_at = elevations.begin() + static_cast<std::ptrdiff_t>(elevations.size() * 99 / 100);
+  std::nth_element(elevations.begin(), high_at, elevations.end());
+  std::nth_element(elevations.begin(), low_at, high_at);
+  const double low = *low_at;
+  const double high = *high_at;
   guess.elevation_span_degrees = high - low;
   guess.ring_count = count_elevation_rings(elevations, low, high);
 }

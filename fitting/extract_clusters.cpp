@@ -4,6 +4,7 @@
 // subgraphs, so only pairs of cells need one witness pair) and PCL's EuclideanClusterExtraction.
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
+#include "geometry/voxel_cells.h"
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -18,39 +19,6 @@
 
 namespace quadrix {
 namespace {
-
-// Open-addressing hash table from a cell key to its index (linear probing, power-of-two size, at
-// most half full). One flat allocation instead of a node per cell as in std::unordered_map.
-class CellTable {
- public:
-  explicit CellTable(std::size_t cells) {
-    std::size_t size = 16;
-    while (size < 2 * cells) size <<= 1;
-    mask_ = size - 1;
-    keys_.assign(size, kEmpty);
-    values_.resize(size);
-  }
-  void insert(std::uint64_t key, std::uint32_t value) {
-    std::size_t slot = hash(key);
-    while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
-    keys_[slot] = key;
-    values_[slot] = value;
-  }
-  /// Index of the cell with `key`, or -1.
-  std::int64_t find(std::uint64_t key) const {
-    for (std::size_t slot = hash(key);; slot = (slot + 1) & mask_) {
-      if (keys_[slot] == key) return values_[slot];
-      if (keys_[slot] == kEmpty) return -1;
-    }
-  }
-
- private:
-  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);  // voxel_key never sets the top bit
-  std::size_t hash(std::uint64_t key) const { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_; }
-  std::size_t mask_ = 0;
-  std::vector<std::uint64_t> keys_;
-  std::vector<std::uint32_t> values_;
-};
 
 /// The candidates sorted by cell: cells are runs of points, columns (x, y) are runs of cells ordered by z.
 struct CellGrid {
@@ -132,10 +100,10 @@ void join_if_close(const CellGrid& grid, std::uint32_t a, std::uint32_t b, doubl
 
 /// Joins cells within reach (|dx|, |dy|, |dz| <= 2), each pair once: a hash lookup per column pair, a merge along z.
 void join_neighbouring_cells(const CellGrid& grid, double radius_squared, detail::UnionFind& sets) {
-  CellTable column_table(grid.columns);
+  CellMap<std::uint32_t> column_table(grid.columns);  // voxel_key of a column (z = 0) -> its index
   for (std::uint32_t k = 0; k < grid.columns; ++k) {
     const Eigen::Vector3i& c = grid.coordinate[grid.column_first[k]];
-    column_table.insert(detail::voxel_key(c.x(), c.y(), 0), k);
+    column_table[detail::voxel_key(c.x(), c.y(), 0)] = k;
   }
   // Neighbouring columns "after" this one ((dx, dy) lexicographically positive), each pair of
   // columns once; the column itself is handled with dz > 0.
@@ -151,10 +119,10 @@ void join_neighbouring_cells(const CellGrid& grid, double radius_squared, detail
         join_if_close(grid, a, b, radius_squared, sets);
     const Eigen::Vector3i& c = coordinate[begin];
     for (const Eigen::Vector2i& offset : forward) {
-      const std::int64_t found = column_table.find(detail::voxel_key(c.x() + offset.x(), c.y() + offset.y(), 0));
-      if (found < 0) continue;
-      const std::uint32_t other_begin = grid.column_first[static_cast<std::size_t>(found)];
-      const std::uint32_t other_end = grid.column_first[static_cast<std::size_t>(found) + 1];
+      const std::uint32_t* found = column_table.find(detail::voxel_key(c.x() + offset.x(), c.y() + offset.y(), 0));
+      if (!found) continue;
+      const std::uint32_t other_begin = grid.column_first[*found];
+      const std::uint32_t other_end = grid.column_first[*found + 1];
       std::uint32_t low = other_begin;  // first cell of the other column not below z - 2 (z rises with a)
       for (std::uint32_t a = begin; a < end; ++a) {
         const int z = coordinate[a].z();

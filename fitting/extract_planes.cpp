@@ -5,6 +5,7 @@
 #include "fitting/extraction.h"
 #include "fitting/extraction_internal.h"
 #include "geometry/constants.h"
+#include "geometry/voxel_cells.h"
 
 #include <algorithm>
 #include <cmath>
@@ -163,29 +164,29 @@ namespace {
 // The candidates in voxels of options.voxel_size, each with its points' moments.
 struct VoxelGrid {
   std::vector<Voxel> voxels;
-  std::unordered_map<std::uint64_t, int> voxel_of_key;
+  CellMap<int> voxel_of_key;
 
   // Index of the voxel at integer coordinate `c`, or -1.
   int find(const Eigen::Vector3i& c) const {
-    const auto it = voxel_of_key.find(detail::voxel_key(c.x(), c.y(), c.z()));
-    return it == voxel_of_key.end() ? -1 : it->second;
+    const int* found = voxel_of_key.find(detail::voxel_key(c.x(), c.y(), c.z()));
+    return found ? *found : -1;
   }
 };
 
 VoxelGrid build_voxels(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& candidates, double voxel_size) {
   VoxelGrid grid;
-  grid.voxel_of_key.reserve(candidates.size() / 4 + 16);
+  grid.voxel_of_key = CellMap<int>(candidates.size() / 4 + 16);
   const double inverse = 1.0 / voxel_size;
   for (const std::uint32_t index : candidates) {
     const Eigen::Vector3d p = points.col(index);
     const Eigen::Vector3i c((p * inverse).array().floor().cast<int>());
     const std::uint64_t key = detail::voxel_key(c.x(), c.y(), c.z());
-    auto [it, inserted] = grid.voxel_of_key.try_emplace(key, static_cast<int>(grid.voxels.size()));
+    const auto [id, inserted] = grid.voxel_of_key.try_emplace(key, static_cast<int>(grid.voxels.size()));
     if (inserted) {
       grid.voxels.emplace_back();
       grid.voxels.back().coordinate = c;
     }
-    Voxel& voxel = grid.voxels[it->second];
+    Voxel& voxel = grid.voxels[static_cast<std::size_t>(id)];
     voxel.members.push_back(index);
     voxel.moments.add(p);
   }

@@ -24,7 +24,8 @@ std::uint64_t cell_key(const Eigen::Vector3i& cell);
 /// double when half full. The voxel hashes of a scan (isolated points, thinning, coverage, planar
 /// voxels) insert ~10^5 cells and look up millions; std::unordered_map allocates a node per cell,
 /// and this map made those stages 2-3 times faster (docs/registration.md, "Time"; Debian 12's Boost
-/// 1.74 has no flat map). Keys are cell_key values (below 2^63); cells are never removed.
+/// 1.74 has no flat map). Keys are below 2^63 (cell_key, the extraction's voxel_key); cells are
+/// never removed.
 template <typename Value>
 class CellMap {
  public:
@@ -49,12 +50,17 @@ class CellMap {
     return values_[slot];
   }
 
-  /// Inserts `key` with a default value; whether it was absent.
-  bool insert(std::uint64_t key) {
+  /// Inserts `key` with `value` when absent: the value held and whether it was inserted.
+  std::pair<Value&, bool> try_emplace(std::uint64_t key, const Value& value) {
     const std::size_t before = size_;
-    (*this)[key];
-    return size_ > before;
+    Value& held = (*this)[key];
+    const bool inserted = size_ > before;
+    if (inserted) held = value;
+    return {held, inserted};
   }
+
+  /// Inserts `key` with a default value; whether it was absent.
+  bool insert(std::uint64_t key) { return try_emplace(key, Value{}).second; }
 
   /// The value of `key`, or nullptr when absent.
   const Value* find(std::uint64_t key) const {
