@@ -22,9 +22,9 @@ std::uint64_t cell_key(const Eigen::Vector3i& cell);
 
 /// A hash map from cell_key to `Value`: open addressing with linear probing in flat arrays that
 /// double when half full. The voxel hashes of a scan (isolated points, thinning, coverage, planar
-/// voxels) insert ~10^5 cells and look up millions; std::unordered_map allocates a node per cell,
-/// and this map made those stages 2-3 times faster (docs/registration.md, "Time"; Debian 12's Boost
-/// 1.74 has no flat map). Keys are below 2^63 (cell_key, the extraction's voxel_key); cells are
+/// voxels) insert ~10^5 cells and look up millions; std::unordered_map allocates a node per cell.
+/// With this map, leaving out a KITTI scan's isolated points takes 4.2 ms instead of 6.6, and 18
+/// instead of 48 with 30% outliers (microbenchmark_dense_search; Debian 12's Boost 1.74 has no flat map). Keys are below 2^63 (cell_key, the extraction's voxel_key); cells are
 /// never removed.
 template <typename Value>
 class CellMap {
