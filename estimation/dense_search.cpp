@@ -40,13 +40,15 @@ Eigen::Matrix3Xd thin(const PointCloud& cloud, double voxel) {
 // Optima are scored at measure_overlap's distance, the one check_overlap judges answers by, m.
 constexpr double kOverlapDistance = 0.3;
 
-// Both clouds thinned, the source sampled, the target indexed and hashed once for scoring every
-// optimum. A target point's normal is fitted the first time ICP pairs a source point with it: the
-// starts reach a fraction of the target (on KITTI, fitting all 46,000 thinned points up front took
-// about 37 ms of a 65 ms preparation).
-struct PreparedPair {
-  Eigen::Matrix3Xd source;   // thinned and sampled source points
-  Eigen::Matrix3Xd coarse;   // every third of them, for the first pass of the search
+}  // namespace
+
+// Both clouds thinned, the target indexed and hashed once for scoring every optimum of every search
+// that shares them. A target point's normal is fitted the first time ICP pairs a source point with
+// it: the starts reach a fraction of the target (on KITTI, fitting all 46,000 thinned points up
+// front took about 37 ms of a 65 ms preparation).
+struct DenseSearchPair::Prepared {
+  double voxel_size = 0.0;
+  Eigen::Matrix3Xd source;  // thinned source points
   PointIndex target_index{Eigen::Matrix3Xd(3, 0)};
   std::optional<TargetCoverage> coverage;  // the thinned target at kOverlapDistance
   std::size_t normal_neighbours = 10;      // neighbours of each normal's plane fit
@@ -74,6 +76,47 @@ struct PreparedPair {
   }
 };
 
+DenseSearchPair::DenseSearchPair(const PointCloud& source, const PointCloud& target, const DenseSearchOptions& options) {
+  validate_dense_search_options(options);
+  // The source side and the target side are independent, and the target's coverage hash and k-d
+  // tree are built from the same thinned points: on KITTI (two cores) building them concurrently
+  // takes the preparation from about 35 to about 22 ms.
+  auto prepared = std::make_shared<Prepared>();
+  prepared->voxel_size = options.voxel_size;
+  Eigen::Matrix3Xd thinned_target;
+  tbb::parallel_invoke([&] { prepared->source = thin(source, options.voxel_size); },
+                       [&] { thinned_target = thin(target, options.voxel_size); });
+  tbb::parallel_invoke(
+      [&] {
+        PointCloud target_cloud;
+        target_cloud.positions = thinned_target.cast<float>();
+        prepared->coverage.emplace(target_cloud, kOverlapDistance);
+      },
+      [&] { prepared->target_index = PointIndex(thinned_target); });
+  const Eigen::Index count = prepared->target_index.points().cols();
+  prepared->normal_neighbours = options.normal_neighbours;
+  prepared->target_normals.resize(3, count);
+  prepared->normal_fitted = std::make_unique<std::once_flag[]>(static_cast<std::size_t>(count));
+  prepared_ = std::move(prepared);
+}
+
+std::size_t DenseSearchPair::source_points() const { return static_cast<std::size_t>(prepared_->source.cols()); }
+
+std::size_t DenseSearchPair::target_points() const { return static_cast<std::size_t>(prepared_->target_index.points().cols()); }
+
+namespace {
+
+// One search's view of a prepared pair: the shared clouds, and the source samples it aligns.
+struct PreparedPair {
+  const DenseSearchPair::Prepared& shared;
+  Eigen::Matrix3Xd source;  // an even stride of at most source_samples thinned source points
+  Eigen::Matrix3Xd coarse;  // every third of them, for the first pass of the search
+  const PointIndex& target_index = shared.target_index;
+  const std::optional<TargetCoverage>& coverage = shared.coverage;
+
+  Eigen::Vector3d normal(Eigen::Index index) const { return shared.normal(index); }
+};
+
 // measure_overlap's fraction over the pair's own samples: those of `points` above `ground` (more
 // than 0.5 m off it, when given) that the target covers after `transform`.
 double covered_fraction(const PreparedPair& pair, const Eigen::Matrix3Xd& points, const Eigen::Isometry3d& transform,
@@ -88,30 +131,20 @@ double covered_fraction(const PreparedPair& pair, const Eigen::Matrix3Xd& points
   return tested > 0 ? static_cast<double>(covered) / static_cast<double>(tested) : 0.0;
 }
 
-PreparedPair prepare(const PointCloud& source, const PointCloud& target, const DenseSearchOptions& options) {
-  // The source side and the target side are independent, and the target's coverage hash and k-d
-  // tree are built from the same thinned points: on KITTI (two cores) building them concurrently
-  // takes the preparation from about 35 to about 22 ms.
-  PreparedPair pair;
-  Eigen::Matrix3Xd thinned_source, thinned_target;
-  tbb::parallel_invoke([&] { thinned_source = thin(source, options.voxel_size); },
-                       [&] { thinned_target = thin(target, options.voxel_size); });
-  tbb::parallel_invoke(
-      [&] {
-        PointCloud target_cloud;
-        target_cloud.positions = thinned_target.cast<float>();
-        pair.coverage.emplace(target_cloud, kOverlapDistance);
-      },
-      [&] { pair.target_index = PointIndex(thinned_target); });
+// The search's samples of a prepared pair; its voxel size and normal fits must be the options'.
+PreparedPair sample(const DenseSearchPair& prepared, const DenseSearchOptions& options) {
+  const DenseSearchPair::Prepared& shared = prepared.prepared();
+  if (shared.voxel_size != options.voxel_size || shared.normal_neighbours != options.normal_neighbours)
+    throw Error("dense search: the pair was prepared with voxel_size " + std::to_string(shared.voxel_size) + " and " +
+                std::to_string(shared.normal_neighbours) + " normal neighbours, the search asks for " +
+                std::to_string(options.voxel_size) + " and " + std::to_string(options.normal_neighbours));
+  PreparedPair pair{shared, {}, {}};
+  const Eigen::Matrix3Xd& thinned_source = shared.source;
   const Eigen::Index samples = std::min<Eigen::Index>(thinned_source.cols(), static_cast<Eigen::Index>(std::max<std::size_t>(options.source_samples, 1)));
   pair.source.resize(3, samples);
   for (Eigen::Index i = 0; i < samples; ++i) pair.source.col(i) = thinned_source.col(i * thinned_source.cols() / std::max<Eigen::Index>(samples, 1));
   pair.coarse.resize(3, (samples + 2) / 3);
   for (Eigen::Index i = 0; i < pair.coarse.cols(); ++i) pair.coarse.col(i) = pair.source.col(3 * i);
-  const Eigen::Index count = pair.target_index.points().cols();
-  pair.normal_neighbours = options.normal_neighbours;
-  pair.target_normals.resize(3, count);
-  pair.normal_fitted = std::make_unique<std::once_flag[]>(static_cast<std::size_t>(count));
   return pair;
 }
 
@@ -380,8 +413,8 @@ void validate_dense_search_options(const DenseSearchOptions& options) {
 
 DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& start,
                                   const DenseSearchOptions& options) {
-  validate_dense_search_options(options);
-  const PreparedPair pair = prepare(source, target, options);
+  const DenseSearchPair prepared(source, target, options);
+  const PreparedPair pair = sample(prepared, options);
   DenseOptimum optimum = run_icp(pair, pair.source, start, options.iterations, options);
   optimum.start = "given";
   optimum.overlap = covered_fraction(pair, pair.source, optimum.transform, std::nullopt);
@@ -395,9 +428,20 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
                                            const std::optional<Eigen::Vector4d>& source_ground,
                                            double translation_disagreement, double rotation_disagreement_degrees,
                                            const DenseSearchOptions& options) {
+  return search_weakest_direction(DenseSearchPair(source, target, options), answer, other_starts, global_starts, up,
+                                  source_ground, translation_disagreement, rotation_disagreement_degrees, options);
+}
+
+DenseSearchResult search_weakest_direction(const DenseSearchPair& prepared, const Eigen::Isometry3d& answer,
+                                           const std::vector<Eigen::Isometry3d>& other_starts,
+                                           const std::vector<Eigen::Isometry3d>& global_starts,
+                                           const std::optional<Eigen::Vector3d>& up,
+                                           const std::optional<Eigen::Vector4d>& source_ground,
+                                           double translation_disagreement, double rotation_disagreement_degrees,
+                                           const DenseSearchOptions& options) {
   validate_dense_search_options(options);
   DenseSearchResult result;
-  const PreparedPair pair = prepare(source, target, options);
+  const PreparedPair pair = sample(prepared, options);
   result.source_points = static_cast<std::size_t>(pair.source.cols());
   result.target_points = static_cast<std::size_t>(pair.target_index.points().cols());
   const WeakestAxes axes = find_weakest_axes(linearise(pair, pair.source, answer, options.correspondence_distance), up);

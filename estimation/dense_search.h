@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -83,6 +84,29 @@ struct DenseSearchResult {
 DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& start,
                                   const DenseSearchOptions& options = {});
 
+/// Both clouds of dense searches prepared once: thinned to one point per cube of
+/// `options.voxel_size` (the first point met), the target indexed (k-d tree) and hashed at
+/// measure_overlap's distance. Each target normal is fitted (over `options.normal_neighbours`
+/// points) the first time a search pairs a source point with it, and kept for every later search.
+/// verify_registration builds one for an answer's half-turn checks and dense search. Throws
+/// quadrix::Error for options out of range (validate_dense_search_options).
+class DenseSearchPair {
+ public:
+  /// Prepares `source` and `target` with `options.voxel_size` and `options.normal_neighbours`.
+  DenseSearchPair(const PointCloud& source, const PointCloud& target, const DenseSearchOptions& options = {});
+  /// Thinned source points (searches align an even stride of at most `source_samples` of them).
+  std::size_t source_points() const;
+  /// Thinned target points.
+  std::size_t target_points() const;
+  /// The prepared clouds (defined in dense_search.cpp, opaque to callers).
+  struct Prepared;
+  /// The prepared clouds, for the searches in dense_search.cpp.
+  const Prepared& prepared() const { return *prepared_; }
+
+ private:
+  std::shared_ptr<const Prepared> prepared_;
+};
+
 /// Runs ICP from `answer` shifted by k·step (|k·step| ≤ range) along the weakest translation
 /// direction of the target's normals at `answer` (orthogonal to `up` when given: motions along the
 /// ground) and by j·across_step (|j·across_step| ≤ across_range) across it, from each of
@@ -93,6 +117,16 @@ DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& ta
 /// rival (farther than `translation_disagreement` m or `rotation_disagreement_degrees` apart).
 /// Throws quadrix::Error for options out of range (validate_dense_search_options).
 DenseSearchResult search_weakest_direction(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& answer,
+                                           const std::vector<Eigen::Isometry3d>& other_starts,
+                                           const std::vector<Eigen::Isometry3d>& global_starts,
+                                           const std::optional<Eigen::Vector3d>& up,
+                                           const std::optional<Eigen::Vector4d>& source_ground,
+                                           double translation_disagreement, double rotation_disagreement_degrees,
+                                           const DenseSearchOptions& options = {});
+
+/// search_weakest_direction over clouds already prepared: `options.voxel_size` and
+/// `options.normal_neighbours` must be those `pair` was prepared with (else quadrix::Error).
+DenseSearchResult search_weakest_direction(const DenseSearchPair& pair, const Eigen::Isometry3d& answer,
                                            const std::vector<Eigen::Isometry3d>& other_starts,
                                            const std::vector<Eigen::Isometry3d>& global_starts,
                                            const std::optional<Eigen::Vector3d>& up,

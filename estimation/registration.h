@@ -260,22 +260,25 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 /// dense_search.minimum_overlap of the source on the target, is replaced by it
 /// (findings.replaced_by_half_turn) and left `ambiguous` with the old answer as its rival, for
 /// the dense search to settle. The pivot comes from `result.overlap` when set, so check_overlap must
-/// have measured the current answer (verify_registration keeps that order). Adds the "half_turn"
-/// timing; verify_registration calls it.
+/// have measured the current answer (verify_registration keeps that order). `prepared`, when given,
+/// holds `source` and `target` already prepared with `options.dense_search` (verify_registration
+/// shares one between its checks); else they are prepared here. Adds the "half_turn" timing;
+/// verify_registration calls it.
 void check_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                     const RegistrationOptions& options, bool may_replace = true);
+                     const RegistrationOptions& options, bool may_replace = true, const DenseSearchPair* prepared = nullptr);
 
 /// Verification after selection (register_clouds and the benchmark): crops both clouds to their
 /// extraction's range limits around the sensor (the platform's own hits are not scene), leaves out
 /// their isolated points (without_isolated_points, `options.ambiguity.isolation_cell`; counted in
-/// result.counts), hashes the target once for every overlap, runs
-/// check_overlap and check_half_turn, then settles an `ambiguous` answer with
+/// result.counts), hashes the target once for every overlap, prepares both clouds once for every
+/// ICP search (DenseSearchPair, while check_overlap runs), runs check_overlap and check_half_turn, then settles an `ambiguous` answer with
 /// search_weakest_direction when `options.dense_search.enabled`, started also from the poses of
 /// correlate_over_ground when both models have a ground: when the best optimum beats every distinct
 /// optimum's overlap by `decisive_margin` it becomes the answer, `ok`, and check_overlap and
 /// check_half_turn run again on it (a half-turned rival that fits clearly better replaces it,
 /// `ambiguous`); otherwise the quadric answer stands, `ambiguous`. Adds "check_inputs", "overlap",
-/// "half_turn", "ground_correlation" and "dense_search" timings.
+/// "dense_preparation" (concurrent with "overlap"), "half_turn", "ground_correlation" and
+/// "dense_search" timings.
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                          const RegistrationOptions& options);
 

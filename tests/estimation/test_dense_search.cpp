@@ -177,6 +177,43 @@ TEST(DenseSearch, StartsReachingOneOptimumShareItsRefinement) {
   EXPECT_EQ(search.optima[1].start, "candidate 0") << "each start keeps its own name";
 }
 
+// One prepared pair serves searches with different samples and starts, and each gives what it
+// gives when it prepares the clouds itself (the target normals it keeps are the same either way);
+// a search that asks for another thinning or normal fit is refused.
+TEST(DenseSearch, APreparedPairServesEverySearchAsItsOwnPreparationWould) {
+  std::mt19937 rng(9);
+  const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(2.0, 0.5, 6.0), 20.0, 40000, rng);
+  Eigen::Isometry3d off = pair.truth;
+  off.pretranslate(Eigen::Vector3d(2.5, 0.4, 0.0));
+  DenseSearchOptions wide, few;
+  few.source_samples = 900;
+  few.range = few.across_range = 0.0;
+  const DenseSearchPair prepared(pair.source, pair.target, wide);
+  EXPECT_GT(prepared.source_points(), 1000u);
+  EXPECT_GT(prepared.target_points(), 1000u);
+  const std::vector<Eigen::Isometry3d> starts = {pair.truth};
+  for (const DenseSearchOptions& options : {few, wide, few}) {
+    const DenseSearchResult shared =
+        search_weakest_direction(prepared, off, starts, {}, Eigen::Vector3d::UnitZ(), std::nullopt, 2.0, 5.0, options);
+    const DenseSearchResult own =
+        search_weakest_direction(pair.source, pair.target, off, starts, {}, Eigen::Vector3d::UnitZ(), std::nullopt, 2.0, 5.0, options);
+    ASSERT_EQ(shared.optima.size(), own.optima.size());
+    EXPECT_EQ(shared.best, own.best);
+    EXPECT_EQ(shared.source_points, own.source_points);
+    for (std::size_t i = 0; i < own.optima.size(); ++i) {
+      EXPECT_EQ(shared.optima[i].overlap, own.optima[i].overlap) << own.optima[i].start;
+      EXPECT_TRUE(shared.optima[i].transform.isApprox(own.optima[i].transform, 0.0)) << own.optima[i].start;
+    }
+    EXPECT_LT(translation_error(shared.optima[shared.best].transform, pair.truth), 0.05);
+  }
+  DenseSearchOptions coarser;
+  coarser.voxel_size = 0.3;
+  EXPECT_THROW(search_weakest_direction(prepared, off, starts, {}, std::nullopt, std::nullopt, 2.0, 5.0, coarser), Error);
+  DenseSearchOptions other_normals;
+  other_normals.normal_neighbours = 20;
+  EXPECT_THROW(search_weakest_direction(prepared, off, starts, {}, std::nullopt, std::nullopt, 2.0, 5.0, other_normals), Error);
+}
+
 // An `ambiguous` answer two pillars off along the colonnade: verify_registration finds the truth.
 TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
   std::mt19937 rng(7);
