@@ -278,9 +278,13 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
 /// check_half_turn run again on it (a half-turned rival that fits clearly better replaces it,
 /// `ambiguous`); otherwise the quadric answer stands, `ambiguous`. Adds "check_inputs", "overlap",
 /// "dense_preparation" (concurrent with "overlap"), "half_turn", "ground_correlation" and
-/// "dense_search" timings.
+/// "dense_search" timings. `source_extraction` and `target_extraction`, when given, are the
+/// extractions of the two clouds: the points they worked on (ExtractionResult::measured) are
+/// taken as the checks' points when they were chosen by the checks' own range limits and
+/// isolated-point rule (else the clouds are cropped and filtered here).
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                         const RegistrationOptions& options);
+                         const RegistrationOptions& options, const ExtractionResult* source_extraction = nullptr,
+                         const ExtractionResult* target_extraction = nullptr);
 
 /// Relative translation error ||t - t_gt||, metres (paper's RTE).
 double translation_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);

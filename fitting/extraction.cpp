@@ -427,6 +427,13 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
     result.isolated_points = result.points_in_range - in_range.size();
     result.timings_ms["isolated_points"] = detail::elapsed_ms(isolation_start);
   }
+  result.measured.indices = in_range;
+  result.measured.cloud_size = cloud.size();
+  result.measured.sensor_origin = options.sensor_origin;
+  result.measured.minimum_range = options.minimum_range;
+  result.measured.maximum_range = options.maximum_range;
+  result.measured.isolation_cell = options.isolation_cell;
+  result.measured.isolation_neighbours = options.isolation_neighbours;
   if (in_range.empty()) {
     result.status = ExtractionStatus::EmptyCloud;
     result.message = cloud.empty() ? "the cloud has no points"
@@ -443,6 +450,7 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
     shapes.timings_ms.insert(result.timings_ms.begin(), result.timings_ms.end());
     shapes.points_in_range = result.points_in_range;
     shapes.isolated_points = result.isolated_points;
+    shapes.measured = std::move(result.measured);
     return shapes;
   }
   ElementGroups groups = options.semantic_mode != SemanticMode::Labels ? extract_geometric(points, in_range, options, up, result)

@@ -237,6 +237,19 @@ struct GroundSegmentation {
   int patches_fitted = 0;                      ///< patches with enough points to test
 };
 
+/// The points an extraction worked on (those within the range limits that keep company by the
+/// isolated-point rule) and the rule that chose them: the registration's checks reuse them when
+/// they crop and leave out isolated points by the same rule.
+struct MeasuredPoints {
+  std::vector<std::uint32_t> indices;                   ///< indices into the cloud, ascending
+  std::size_t cloud_size = 0;                           ///< points of the cloud they index
+  Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();  ///< ExtractionOptions::sensor_origin the range was measured from
+  double minimum_range = 0.0;                           ///< ExtractionOptions::minimum_range used, m
+  double maximum_range = 0.0;                           ///< ExtractionOptions::maximum_range used, m (0: none)
+  double isolation_cell = 0.0;                          ///< ExtractionOptions::isolation_cell used, m (0: no point left out)
+  int isolation_neighbours = 1;                         ///< ExtractionOptions::isolation_neighbours used
+};
+
 /// Everything an extraction returns.
 struct ExtractionResult {
   ExtractionStatus status = ExtractionStatus::Ok;  ///< outcome
@@ -247,6 +260,7 @@ struct ExtractionResult {
   double ground_offset = 0.0;                      ///< ground plane normal . x + offset = 0
   std::size_t points_in_range = 0;                 ///< points kept by the range limits
   std::size_t isolated_points = 0;                 ///< of those, points left out as isolated (ExtractionOptions::isolation_cell)
+  MeasuredPoints measured;                         ///< the points in range that keep company, which the extraction worked on
   std::map<std::string, double> timings_ms;        ///< per-stage wall times
 };
 

@@ -388,6 +388,57 @@ TEST(VerifyRegistration, AnOkAnswerLandingNoMoreThanNotMovingWaitsForTheDenseSea
 // The half-turn check on a synthetic street pair 30 m apart with opposite headings: the true answer
 // beats its mirror image and is polished by ICP; the mirror image of the truth, handed over as a
 // confident answer, is found out, replaced by its rival and settled back onto the truth.
+// The checks take the points the extraction worked on only when the extraction chose them by the
+// checks' own rule: with the same rule the verification is the same as cropping and filtering
+// again, and with another rule the checks filter by theirs (reusing the extraction's points would
+// give the extraction's count of isolated points instead).
+TEST(VerifyRegistration, TheExtractionsPointsServeTheChecksOnlyWhenChosenByTheirRule) {
+  const std::vector<Eigen::Vector3d> world = make_street_world(12);
+  const Eigen::Isometry3d source_pose = make_pose(0.0, {-4.0, -0.5, 1.73}), target_pose = make_pose(35.0, {3.0, 1.0, 1.73});
+  PointCloud source = observe(world, source_pose);
+  const PointCloud target = observe(world, target_pose);
+  // 1% strays spread through the source's box, a few of them in pairs within a metre (kept by a
+  // 0.6 m rule, not by a 0.3 m one).
+  std::mt19937 random(4);
+  const Eigen::Vector3f low = source.positions.rowwise().minCoeff(), high = source.positions.rowwise().maxCoeff();
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f), near(-0.45f, 0.45f);
+  const Eigen::Index count = source.positions.cols(), strays = count / 100;
+  source.positions.conservativeResize(3, count + strays);
+  for (Eigen::Index i = 0; i < strays; ++i) {
+    const Eigen::Vector3f stray = low + Eigen::Vector3f(unit(random), unit(random), unit(random)).cwiseProduct(high - low);
+    source.positions.col(count + i) =
+        i % 4 == 1 ? Eigen::Vector3f(source.positions.col(count + i - 1) + Eigen::Vector3f(near(random), near(random), near(random)))
+                   : stray;
+  }
+  RegistrationOptions options;
+  options.modelling.augmentation_threshold = 0;  // quadrics only, as in the street tests above
+  const ModellingResult source_modelling = model_scene(source, options.source_extraction, options.modelling);
+  const ModellingResult target_modelling = model_scene(target, options.target_extraction, options.modelling);
+  const RegistrationResult registered = register_models(source_modelling.model, target_modelling.model, options);
+  const auto verified = [&](const RegistrationOptions& rule, bool with_extractions) {
+    RegistrationResult result = registered;
+    if (with_extractions)
+      verify_registration(result, source, target, rule, &source_modelling.extraction, &target_modelling.extraction);
+    else
+      verify_registration(result, source, target, rule);
+    return result;
+  };
+  RegistrationOptions wider = options;
+  wider.ambiguity.isolation_cell = 0.6;
+  for (const RegistrationOptions& rule : {options, wider}) {
+    const RegistrationResult reused = verified(rule, true), filtered = verified(rule, false);
+    EXPECT_EQ(reused.status, filtered.status) << reused.message;
+    EXPECT_TRUE(reused.transform.isApprox(filtered.transform, 0.0));
+    EXPECT_EQ(reused.message, filtered.message);
+    EXPECT_EQ(reused.counts.source_isolated_points, filtered.counts.source_isolated_points);
+    EXPECT_EQ(reused.counts.target_isolated_points, filtered.counts.target_isolated_points);
+    EXPECT_GT(filtered.counts.source_isolated_points, 0u);
+  }
+  EXPECT_EQ(verified(options, false).counts.source_isolated_points, source_modelling.extraction.isolated_points);
+  EXPECT_LT(verified(wider, false).counts.source_isolated_points, source_modelling.extraction.isolated_points)
+      << "the wider rule keeps the strays that come in pairs";
+}
+
 TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
   const std::vector<Eigen::Vector3d> world = make_street_world(14);
   const Eigen::Isometry3d source_pose = make_pose(180.0, {12.0, 0.5, 1.73});
