@@ -72,15 +72,24 @@ void BM_SearchWeakestDirection3dtk(benchmark::State& state) {
 }
 BENCHMARK(BM_SearchWeakestDirection3dtk)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// Reads two files of the shared data into `source` and `target`; skips the benchmark when either is absent.
+bool read_shared_pair(benchmark::State& state, const std::string& source_name, const std::string& target_name,
+                      quadrix::PointCloud& source, quadrix::PointCloud& target) {
+  for (const std::string& name : {source_name, target_name})
+    if (!std::filesystem::exists(data_path(name))) {
+      state.SkipWithError(("real data absent: " + data_path(name)).c_str());
+      return false;
+    }
+  source = quadrix::read_point_cloud(data_path(source_name));
+  target = quadrix::read_point_cloud(data_path(target_name));
+  return true;
+}
+
 // The correlation over yaw and ground translation (estimation/ground_correlation.h) on KITTI-00
 // frames 52 -> 88, 29.9 m apart, with the ground each frame's sensor sees 1.73 m below it.
 void BM_CorrelateOverGroundKitti52To88(benchmark::State& state) {
-  const std::string source_path = data_path("kitti00/velodyne/000052.bin"), target_path = data_path("kitti00/velodyne/000088.bin");
-  if (!std::filesystem::exists(source_path) || !std::filesystem::exists(target_path)) {
-    state.SkipWithError(("real data absent: " + source_path).c_str());
-    return;
-  }
-  const quadrix::PointCloud source = quadrix::read_point_cloud(source_path), target = quadrix::read_point_cloud(target_path);
+  quadrix::PointCloud source, target;
+  if (!read_shared_pair(state, "kitti00/velodyne/000052.bin", "kitti00/velodyne/000088.bin", source, target)) return;
   const Eigen::Vector4d ground(0.0, 0.0, 1.0, 1.73);
   for (auto _ : state) benchmark::DoNotOptimize(quadrix::correlate_over_ground(source, target, ground, ground).size());
 }
@@ -90,12 +99,8 @@ BENCHMARK(BM_CorrelateOverGroundKitti52To88)->Unit(benchmark::kMillisecond)->Use
 // `auto` on both scans): what every `ok` answer pays for its checks. Reports the half-turn check's
 // share, and that of preparing both clouds for it (beside the overlap check), as counters.
 void BM_VerifyOkAnswerKitti0To4438(benchmark::State& state) {
-  const std::string source_path = data_path("kitti00/velodyne/000000.bin"), target_path = data_path("kitti00/velodyne/004438.ply");
-  if (!std::filesystem::exists(source_path) || !std::filesystem::exists(target_path)) {
-    state.SkipWithError(("real data absent: " + source_path).c_str());
-    return;
-  }
-  const quadrix::PointCloud source = quadrix::read_point_cloud(source_path), target = quadrix::read_point_cloud(target_path);
+  quadrix::PointCloud source, target;
+  if (!read_shared_pair(state, "kitti00/velodyne/000000.bin", "kitti00/velodyne/004438.ply", source, target)) return;
   const quadrix::RegistrationOptions options = quadrix::resolve_registration_options("auto", source, "auto", target);
   const quadrix::RegistrationResult registered = quadrix::register_clouds(source, target, options);
   if (registered.status != quadrix::RegistrationStatus::Ok) {
