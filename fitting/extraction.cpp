@@ -341,11 +341,12 @@ ElementGroups extract_geometric(const Eigen::Matrix3Xd& points, const std::vecto
 
   stage = Clock::now();
   std::vector<std::vector<std::uint32_t>> clusters = euclidean_clusters(points, remaining, options.clusters);
+  // One reference for every cluster: choosing between the heights and an empty vector inside the
+  // test copied all of them (half a megabyte on KITTI) once per cluster, ~5% of a modelling.
+  const std::vector<float> no_heights;
+  const std::vector<float>& heights = ground.found ? height_of_point : no_heights;
   clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
-                                [&](const auto& cluster) {
-                                  return !keep_cluster(points, cluster, ground.found ? height_of_point : std::vector<float>(),
-                                                       options.clusters);
-                                }),
+                                [&](const auto& cluster) { return !keep_cluster(points, cluster, heights, options.clusters); }),
                  clusters.end());
   result.timings_ms["clusters"] = detail::elapsed_ms(stage);
   stage = Clock::now();
