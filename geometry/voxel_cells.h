@@ -93,6 +93,7 @@ class CellMap {
   // Fibonacci hashing: the high bits of key * 2^64/phi, which spreads neighbouring cells apart.
   std::size_t slot_of(std::uint64_t key) const { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_); }
 
+  // Empties the map into the smallest power of two of at least `minimum_slots` slots (and 16).
   void reset(std::size_t minimum_slots) {
     std::size_t slots = 16;
     int bits = 4;
@@ -107,6 +108,7 @@ class CellMap {
     size_ = 0;
   }
 
+  // Doubles the slots and inserts every cell again.
   void grow() {
     std::vector<std::uint64_t> keys = std::move(keys_);
     std::vector<Value> values = std::move(values_);
