@@ -111,10 +111,6 @@ struct PreparedPair {
   const DenseSearchPair::Prepared& shared;
   Eigen::Matrix3Xd source;  // an even stride of at most source_samples thinned source points
   Eigen::Matrix3Xd coarse;  // every third of them, for the first pass of the search
-  const PointIndex& target_index = shared.target_index;
-  const std::optional<TargetCoverage>& coverage = shared.coverage;
-
-  Eigen::Vector3d normal(Eigen::Index index) const { return shared.normal(index); }
 };
 
 // measure_overlap's fraction over the pair's own samples: those of `points` above `ground` (more
@@ -126,7 +122,7 @@ double covered_fraction(const PreparedPair& pair, const Eigen::Matrix3Xd& points
     const Eigen::Vector3d p = points.col(i);
     if (ground && std::abs(ground->head<3>().dot(p) + (*ground)(3)) < 0.5) continue;
     ++tested;
-    covered += pair.coverage->covers(transform * p) ? 1 : 0;
+    covered += pair.shared.coverage->covers(transform * p) ? 1 : 0;
   }
   return tested > 0 ? static_cast<double>(covered) / static_cast<double>(tested) : 0.0;
 }
@@ -162,11 +158,11 @@ Linearisation linearise(const PreparedPair& pair, const Eigen::Matrix3Xd& source
   result.residuals.reserve(static_cast<std::size_t>(source.cols()));
   for (Eigen::Index i = 0; i < source.cols(); ++i) {
     const Eigen::Vector3d p = transform * Eigen::Vector3d(source.col(i));
-    const std::optional<Neighbor> nearest = pair.target_index.nearest_within(p, maximum_distance);
+    const std::optional<Neighbor> nearest = pair.shared.target_index.nearest_within(p, maximum_distance);
     if (!nearest) continue;
-    const Eigen::Vector3d n = pair.normal(static_cast<Eigen::Index>(nearest->index));
+    const Eigen::Vector3d n = pair.shared.normal(static_cast<Eigen::Index>(nearest->index));
     if (n.isZero()) continue;
-    const double residual = n.dot(p - pair.target_index.points().col(static_cast<Eigen::Index>(nearest->index)));
+    const double residual = n.dot(p - pair.shared.target_index.points().col(static_cast<Eigen::Index>(nearest->index)));
     Eigen::Matrix<double, 6, 1> row;
     row << p.cross(n), n;  // d/dω of n·(exp(ω)p + τ) at 0, then d/dτ
     result.information += row * row.transpose();
@@ -443,7 +439,7 @@ DenseSearchResult search_weakest_direction(const DenseSearchPair& prepared, cons
   DenseSearchResult result;
   const PreparedPair pair = sample(prepared, options);
   result.source_points = static_cast<std::size_t>(pair.source.cols());
-  result.target_points = static_cast<std::size_t>(pair.target_index.points().cols());
+  result.target_points = static_cast<std::size_t>(pair.shared.target_index.points().cols());
   const WeakestAxes axes = find_weakest_axes(linearise(pair, pair.source, answer, options.correspondence_distance), up);
   result.weakest_direction = axes.weakest;
   result.weakest_share = axes.share;

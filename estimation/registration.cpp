@@ -735,8 +735,7 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
     const MeasuredPoints& measured = extraction->measured;
     const bool same = measured.cloud_size == cloud.size() && measured.sensor_origin == side.sensor_origin &&
                       measured.minimum_range == side.minimum_range && measured.maximum_range == side.maximum_range &&
-                      measured.isolation_cell == cell && measured.isolation_neighbours == neighbours &&
-                      measured.indices.size() + extraction->isolated_points == extraction->points_in_range;
+                      measured.isolation_cell == cell && measured.isolation_neighbours == neighbours;
     return same ? extraction : nullptr;
   };
   const ExtractionResult* source_chosen = chosen_by(source_extraction, source, options.source_extraction);

@@ -271,9 +271,10 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
 /// extraction's range limits around the sensor (the platform's own hits are not scene), leaves out
 /// their isolated points (without_isolated_points, `options.ambiguity.isolation_cell`; counted in
 /// result.counts), hashes the target once for every overlap, prepares both clouds once for every
-/// ICP search (DenseSearchPair, while check_overlap runs), runs check_overlap and check_half_turn, then settles an `ambiguous` answer with
-/// search_weakest_direction when `options.dense_search.enabled`, started also from the poses of
-/// correlate_over_ground when both models have a ground: when the best optimum beats every distinct
+/// ICP search (DenseSearchPair, while check_overlap runs), runs check_overlap and check_half_turn,
+/// then settles an `ambiguous` answer with search_weakest_direction when
+/// `options.dense_search.enabled`, started also from the poses of correlate_over_ground when both
+/// models have a ground: when the best optimum beats every distinct
 /// optimum's overlap by `decisive_margin` it becomes the answer, `ok`, and check_overlap and
 /// check_half_turn run again on it (a half-turned rival that fits clearly better replaces it,
 /// `ambiguous`); otherwise the quadric answer stands, `ambiguous`. Adds "check_inputs", "overlap",

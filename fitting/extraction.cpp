@@ -331,8 +331,11 @@ ElementGroups extract_geometric(const Eigen::Matrix3Xd& points, const std::vecto
   const GroundSegmentation ground = segment_ground(points, in_range, options.ground, options.sensor_origin, up);
   if (ground.found) set_ground(result, points, ground.ground_indices, up, &ground);
   result.timings_ms["ground"] = detail::elapsed_ms(stage);
-  std::vector<float> height_of_point(static_cast<std::size_t>(points.cols()), 1e9f);
-  for (std::size_t i = 0; i < ground.other_indices.size(); ++i) height_of_point[ground.other_indices[i]] = ground.other_heights[i];
+  std::vector<float> height_of_point;  // per cloud point, when a ground was found (else no height test)
+  if (ground.found) {
+    height_of_point.assign(static_cast<std::size_t>(points.cols()), 1e9f);
+    for (std::size_t i = 0; i < ground.other_indices.size(); ++i) height_of_point[ground.other_indices[i]] = ground.other_heights[i];
+  }
 
   stage = Clock::now();
   std::vector<std::uint32_t> remaining;
@@ -341,12 +344,8 @@ ElementGroups extract_geometric(const Eigen::Matrix3Xd& points, const std::vecto
 
   stage = Clock::now();
   std::vector<std::vector<std::uint32_t>> clusters = euclidean_clusters(points, remaining, options.clusters);
-  // One reference for every cluster: choosing between the heights and an empty vector inside the
-  // test copied all of them (half a megabyte on KITTI) once per cluster, ~5% of a modelling.
-  const std::vector<float> no_heights;
-  const std::vector<float>& heights = ground.found ? height_of_point : no_heights;
   clusters.erase(std::remove_if(clusters.begin(), clusters.end(),
-                                [&](const auto& cluster) { return !keep_cluster(points, cluster, heights, options.clusters); }),
+                                [&](const auto& cluster) { return !keep_cluster(points, cluster, height_of_point, options.clusters); }),
                  clusters.end());
   result.timings_ms["clusters"] = detail::elapsed_ms(stage);
   stage = Clock::now();
