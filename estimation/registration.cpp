@@ -718,9 +718,28 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
   });
 }
 
-void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                         const RegistrationOptions& options, const ExtractionResult* source_extraction,
-                         const ExtractionResult* target_extraction) {
+namespace {
+
+// What every check of an answer measures, prepared before the answer is known: it depends on the
+// clouds and the options only (prepare_checks).
+struct CheckInputs {
+  PointCloud source, target;               // within the extraction's range, isolated points left out
+  std::optional<TargetCoverage> coverage;  // the target hashed at measure_overlap's distance
+  std::optional<DenseSearchPair> prepared; // both prepared for the ICP searches, when one may run
+  std::size_t source_isolated_points = 0, target_isolated_points = 0;
+  double inputs_ms = 0.0, preparation_ms = 0.0;
+};
+
+// Whether the options let a half-turn check or a dense search run on some answer.
+bool may_search(const RegistrationOptions& options) {
+  return options.ambiguity.half_turn_margin >= 0.0 || options.dense_search.enabled;
+}
+
+// The checks' points (the extractions' own when chosen by the same rule), the target's hash and,
+// when `prepare_search`, the pair every ICP search shares (DenseSearchPair).
+CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, const RegistrationOptions& options,
+                           const ExtractionResult* source_extraction, const ExtractionResult* target_extraction,
+                           bool prepare_search) {
   // Every check measures the clouds within the extraction's range, without their isolated points:
   // a spurious return never lands on the other scan, so each one would count against the right
   // answer (docs/registration.md, "Isolated points").
@@ -745,57 +764,63 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
     selected.positions = cloud.positions(Eigen::all, indices);
     return selected;
   };
-  PointCloud cropped_source = source_chosen ? PointCloud{} : crop_to_range(source, options.source_extraction);
-  PointCloud cropped_target = target_chosen ? PointCloud{} : crop_to_range(target, options.target_extraction);
-  // The target is hashed once, for every overlap measured below. When the isolation cube is the
+  CheckInputs inputs;
+  const Clock::time_point start = Clock::now();
+  // The target is hashed once, for every overlap measured after. When the isolation cube is the
   // overlap's own distance (the default), that hash's cells also tell the isolated target points.
-  std::optional<TargetCoverage> coverage;
-  timed(result, "check_inputs", [&] {
-    tbb::parallel_invoke(
-        [&] {
-          if (source_chosen) {
-            cropped_source = select(source, source_chosen->measured.indices);
-            result.counts.source_isolated_points = source_chosen->isolated_points;
-            return;
-          }
-          const std::size_t in_range = cropped_source.size();
-          if (cell > 0.0) cropped_source = without_isolated_points(cropped_source, cell, neighbours);
-          result.counts.source_isolated_points = in_range - cropped_source.size();
-        },
-        [&] {
-          if (target_chosen) {
-            cropped_target = select(target, target_chosen->measured.indices);
-            coverage.emplace(cropped_target, distance);
-            result.counts.target_isolated_points = target_chosen->isolated_points;
-            return;
-          }
-          const std::size_t in_range = cropped_target.size();
-          if (cell > 0.0 && cell != distance) cropped_target = without_isolated_points(cropped_target, cell, neighbours);
-          coverage.emplace(cropped_target, distance);
-          if (cell == distance)
-            cropped_target.positions = cropped_target.positions(Eigen::all, coverage->leave_out_isolated_points(neighbours)).eval();
-          result.counts.target_isolated_points = in_range - cropped_target.size();
-        });
-  });
+  tbb::parallel_invoke(
+      [&] {
+        if (source_chosen) {
+          inputs.source = select(source, source_chosen->measured.indices);
+          inputs.source_isolated_points = source_chosen->isolated_points;
+          return;
+        }
+        inputs.source = crop_to_range(source, options.source_extraction);
+        const std::size_t in_range = inputs.source.size();
+        if (cell > 0.0) inputs.source = without_isolated_points(inputs.source, cell, neighbours);
+        inputs.source_isolated_points = in_range - inputs.source.size();
+      },
+      [&] {
+        if (target_chosen) {
+          inputs.target = select(target, target_chosen->measured.indices);
+          inputs.coverage.emplace(inputs.target, distance);
+          inputs.target_isolated_points = target_chosen->isolated_points;
+          return;
+        }
+        inputs.target = crop_to_range(target, options.target_extraction);
+        const std::size_t in_range = inputs.target.size();
+        if (cell > 0.0 && cell != distance) inputs.target = without_isolated_points(inputs.target, cell, neighbours);
+        inputs.coverage.emplace(inputs.target, distance);
+        if (cell == distance)
+          inputs.target.positions = inputs.target.positions(Eigen::all, inputs.coverage->leave_out_isolated_points(neighbours)).eval();
+        inputs.target_isolated_points = in_range - inputs.target.size();
+      });
+  inputs.inputs_ms = elapsed_ms(start);
+  if (prepare_search && !inputs.source.empty() && !inputs.target.empty()) {
+    const Clock::time_point preparation = Clock::now();
+    inputs.prepared.emplace(inputs.source, inputs.target, options.dense_search);
+    inputs.preparation_ms = elapsed_ms(preparation);
+  }
+  return inputs;
+}
+
+// verify_registration on inputs prepare_checks made for these clouds and options.
+void verify_prepared(RegistrationResult& result, const CheckInputs& inputs, const RegistrationOptions& options) {
+  result.timings_ms["check_inputs"] += inputs.inputs_ms;
+  if (inputs.prepared) result.timings_ms["dense_preparation"] += inputs.preparation_ms;
+  result.counts.source_isolated_points = inputs.source_isolated_points;
+  result.counts.target_isolated_points = inputs.target_isolated_points;
+  const PointCloud& cropped_source = inputs.source;
+  const PointCloud& cropped_target = inputs.target;
   // The overlap guard first: an `ok` answer that fits the points worse than not moving becomes
-  // `ambiguous`, and the dense search then gets its chance too. Meanwhile both clouds are prepared
-  // once for every ICP search below (the half-turn checks and the dense search): they depend on the
-  // clouds only, so the preparation (~20 ms on KITTI) runs beside the overlap check.
-  const bool searches = (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) &&
-                        (options.ambiguity.half_turn_margin >= 0.0 || options.dense_search.enabled) &&
-                        !cropped_source.empty() && !cropped_target.empty();
-  std::optional<DenseSearchPair> prepared;
-  double preparation_ms = 0.0;
-  tbb::parallel_invoke([&] { check_overlap_against(result, cropped_source, *coverage, options.ambiguity); },
-                       [&] {
-                         if (!searches) return;
-                         const Clock::time_point start = Clock::now();
-                         prepared.emplace(cropped_source, cropped_target, options.dense_search);
-                         preparation_ms = elapsed_ms(start);
-                       });
-  if (prepared) result.timings_ms["dense_preparation"] += preparation_ms;
-  check_half_turn(result, cropped_source, cropped_target, options, true, prepared ? &*prepared : nullptr);
-  if (result.status != RegistrationStatus::Ambiguous || !options.dense_search.enabled || !prepared) return;
+  // `ambiguous`, and the dense search then gets its chance too.
+  check_overlap_against(result, cropped_source, *inputs.coverage, options.ambiguity);
+  const bool searches =
+      (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) && inputs.prepared;
+  if (!searches) return;
+  const DenseSearchPair& prepared = *inputs.prepared;
+  check_half_turn(result, cropped_source, cropped_target, options, true, &prepared);
+  if (result.status != RegistrationStatus::Ambiguous || !options.dense_search.enabled) return;
   // The dense search also starts from the poses of the correlation over yaw and ground translation,
   // which reach answers no quadric candidate is near (hard pairs whose cliques hold no true inlier).
   const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
@@ -810,14 +835,26 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
       if (!poses.empty()) why << ", best lands " << poses.front().share << " of the source cells at yaw " << poses.front().yaw_degrees << " deg";
       result.message += why.str();
     });
-  timed(result, "dense_search", [&] { settle_with_dense_search(result, *prepared, options); });
+  timed(result, "dense_search", [&] { settle_with_dense_search(result, prepared, options); });
   // The new answer, under the same guards. A half-turned rival that fits it clearly better takes
   // its place, `ambiguous` (the dense search is not run again): on the tuning set under random yaw
   // one settled answer of 68 was a street's mirror image, and its rival the truth.
   if (result.findings.settled_by_dense_search) {
-    check_overlap_against(result, cropped_source, *coverage, options.ambiguity);
-    check_half_turn(result, cropped_source, cropped_target, options, true, &*prepared);
+    check_overlap_against(result, cropped_source, *inputs.coverage, options.ambiguity);
+    check_half_turn(result, cropped_source, cropped_target, options, true, &prepared);
   }
+}
+
+}  // namespace
+
+void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                         const RegistrationOptions& options, const ExtractionResult* source_extraction,
+                         const ExtractionResult* target_extraction) {
+  // The answer is known here: the searches' preparation is paid only when one may run on it.
+  const bool prepare_search =
+      (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) && may_search(options);
+  verify_prepared(result, prepare_checks(source, target, options, source_extraction, target_extraction, prepare_search),
+                  options);
 }
 
 bool lacks_augmentation_of(const SceneModel& model, const SceneModel& other) {
@@ -855,10 +892,22 @@ RegistrationResult register_modelled_clouds(const ModelledCloud& source, const M
     else if (augment(target, *source.modelling, target_ms)) target_modelling = &*augmented;
   }
 
-  RegistrationResult result =
-      adjust_models ? register_models(adjust_models(source_modelling->model), adjust_models(target_modelling->model), options)
-                    : register_models(source_modelling->model, target_modelling->model, options);
-  verify_registration(result, *source.cloud, *target.cloud, options, &source_modelling->extraction, &target_modelling->extraction);
+  // The checks' inputs and the searches' preparation depend on the clouds only, so they are made
+  // while the quadrics are matched (~25 ms beside ~10 on a KITTI pair; docs/registration.md, "Time").
+  // They are wasted when no answer comes out, which costs the difference.
+  RegistrationResult result;
+  std::optional<CheckInputs> inputs;
+  tbb::parallel_invoke(
+      [&] {
+        result = adjust_models
+                     ? register_models(adjust_models(source_modelling->model), adjust_models(target_modelling->model), options)
+                     : register_models(source_modelling->model, target_modelling->model, options);
+      },
+      [&] {
+        inputs = prepare_checks(*source.cloud, *target.cloud, options, &source_modelling->extraction,
+                                &target_modelling->extraction, may_search(options));
+      });
+  verify_prepared(result, *inputs, options);
   result.timings_ms["modelling_source"] = source_ms;
   result.timings_ms["modelling_target"] = target_ms;
   const bool concurrent = source.modelled_concurrently && target.modelled_concurrently;

@@ -229,8 +229,9 @@ using ModelAdjustment = std::function<SceneModel(const SceneModel&)>;
 
 /// The pipeline after modelling, shared by register_clouds and the benchmark: the other side augmented
 /// when only one side was (augment_other_side, on a copy), `adjust_models` when given, register_models,
-/// then verify_registration on the clouds. Fills the counts of points and elements, the modelling
-/// timings and "total" (both modelling_ms, or the longer when modelled_concurrently, plus this call).
+/// then verify_registration on the clouds; the checks' inputs and the searches' preparation, which
+/// need no answer, are made while register_models runs. Fills the counts of points and elements, the
+/// modelling timings and "total" (both modelling_ms, or the longer when modelled_concurrently, plus this call).
 RegistrationResult register_modelled_clouds(const ModelledCloud& source, const ModelledCloud& target,
                                             const RegistrationOptions& options = {},
                                             const ModelAdjustment& adjust_models = {});
@@ -271,14 +272,14 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
 /// extraction's range limits around the sensor (the platform's own hits are not scene), leaves out
 /// their isolated points (without_isolated_points, `options.ambiguity.isolation_cell`; counted in
 /// result.counts), hashes the target once for every overlap, prepares both clouds once for every
-/// ICP search (DenseSearchPair, while check_overlap runs), runs check_overlap and check_half_turn,
+/// ICP search (DenseSearchPair, when the answer is `ok` or `ambiguous`), runs check_overlap and check_half_turn,
 /// then settles an `ambiguous` answer with search_weakest_direction when
 /// `options.dense_search.enabled`, started also from the poses of correlate_over_ground when both
 /// models have a ground: when the best optimum beats every distinct
 /// optimum's overlap by `decisive_margin` it becomes the answer, `ok`, and check_overlap and
 /// check_half_turn run again on it (a half-turned rival that fits clearly better replaces it,
 /// `ambiguous`); otherwise the quadric answer stands, `ambiguous`. Adds "check_inputs", "overlap",
-/// "dense_preparation" (concurrent with "overlap"), "half_turn", "ground_correlation" and
+/// "dense_preparation", "half_turn", "ground_correlation" and
 /// "dense_search" timings. `source_extraction` and `target_extraction`, when given, are the
 /// extractions of the two clouds: the points they worked on (ExtractionResult::measured) are
 /// taken as the checks' points when they were chosen by the checks' own range limits and

@@ -97,7 +97,7 @@ BENCHMARK(BM_CorrelateOverGroundKitti52To88)->Unit(benchmark::kMillisecond)->Use
 
 // verify_registration on the `ok` answer register_clouds gives KITTI-00 0 -> 4438 (5.3 m apart,
 // `auto` on both scans): what every `ok` answer pays for its checks. Reports the half-turn check's
-// share, and that of preparing both clouds for it (beside the overlap check), as counters.
+// share, and that of preparing both clouds for it, as counters.
 void BM_VerifyOkAnswerKitti0To4438(benchmark::State& state) {
   quadrix::PointCloud source, target;
   if (!read_shared_pair(state, "kitti00/velodyne/000000.bin", "kitti00/velodyne/004438.ply", source, target)) return;
