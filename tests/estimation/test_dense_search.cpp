@@ -8,6 +8,7 @@
 #include "geometry/error.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -212,6 +213,33 @@ TEST(DenseSearch, APreparedPairServesEverySearchAsItsOwnPreparationWould) {
   DenseSearchOptions other_normals;
   other_normals.normal_neighbours = 20;
   EXPECT_THROW(search_weakest_direction(prepared, off, starts, {}, std::nullopt, std::nullopt, 2.0, 5.0, other_normals), Error);
+}
+
+// ICP finds its point pairs in parallel blocks and sums them in point order: every optimum is the
+// same to the last bit on one thread as on many.
+TEST(DenseSearch, OptimaDoNotDependOnTheThreadCount) {
+  std::mt19937 rng(21);
+  const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(2.0, 0.5, 6.0), 20.0, 40000, rng);
+  Eigen::Isometry3d off = pair.truth;
+  off.pretranslate(Eigen::Vector3d(2.5, 0.4, 0.0));
+  const DenseSearchOptions options;
+  const auto search = [&] {
+    return search_weakest_direction(pair.source, pair.target, off, {pair.truth}, {}, Eigen::Vector3d::UnitZ(), std::nullopt,
+                                    2.0, 5.0, options);
+  };
+  const DenseSearchResult many = search();
+  const DenseSearchResult one = [&] {
+    const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    return search();
+  }();
+  ASSERT_EQ(one.optima.size(), many.optima.size());
+  EXPECT_EQ(one.best, many.best);
+  for (std::size_t i = 0; i < many.optima.size(); ++i) {
+    EXPECT_EQ(one.optima[i].overlap, many.optima[i].overlap) << many.optima[i].start;
+    EXPECT_EQ(one.optima[i].median_residual, many.optima[i].median_residual) << many.optima[i].start;
+    EXPECT_TRUE(one.optima[i].transform.isApprox(many.optima[i].transform, 0.0)) << many.optima[i].start;
+  }
+  EXPECT_LT(translation_error(many.optima[many.best].transform, pair.truth), 0.05);
 }
 
 // An `ambiguous` answer two pillars off along the colonnade: verify_registration finds the truth.

@@ -7,6 +7,7 @@
 #include "test_data.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
@@ -437,6 +438,40 @@ TEST(VerifyRegistration, TheExtractionsPointsServeTheChecksOnlyWhenChosenByTheir
   EXPECT_EQ(verified(options, false).counts.source_isolated_points, source_modelling.extraction.isolated_points);
   EXPECT_LT(verified(wider, false).counts.source_isolated_points, source_modelling.extraction.isolated_points)
       << "the wider rule keeps the strays that come in pairs";
+}
+
+// register_modelled_clouds makes the checks' inputs while it matches the quadrics, and ICP finds
+// its point pairs on every thread: the answer must be the one register_models followed by
+// verify_registration gives, on one thread as on many.
+TEST(RegisterModelledClouds, ChecksPreparedDuringTheMatchingGiveTheSequentialAnswerOnAnyThreadCount) {
+  const std::vector<Eigen::Vector3d> world = make_street_world(12);
+  const PointCloud source = observe(world, make_pose(0.0, {-4.0, -0.5, 1.73}));
+  const PointCloud target = observe(world, make_pose(35.0, {3.0, 1.0, 1.73}));
+  RegistrationOptions options;
+  options.modelling.augmentation_threshold = 0;  // quadrics only, as in the street tests above
+  const ModellingResult source_modelling = model_scene(source, options.source_extraction, options.modelling);
+  const ModellingResult target_modelling = model_scene(target, options.target_extraction, options.modelling);
+  RegistrationResult sequential = register_models(source_modelling.model, target_modelling.model, options);
+  verify_registration(sequential, source, target, options, &source_modelling.extraction, &target_modelling.extraction);
+  ASSERT_TRUE(sequential.half_turn.has_value()) << "the half-turn check's ICP must run: " << sequential.message;
+  const auto pipeline = [&] {
+    return register_modelled_clouds({&source, &source_modelling, 0.0, false}, {&target, &target_modelling, 0.0, false}, options);
+  };
+  const RegistrationResult many = pipeline();
+  const RegistrationResult one = [&] {
+    const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    return pipeline();
+  }();
+  for (const RegistrationResult* result : {&many, &one}) {
+    EXPECT_EQ(result->status, sequential.status) << result->message;
+    EXPECT_TRUE(result->transform.isApprox(sequential.transform, 0.0));
+    EXPECT_EQ(result->message, sequential.message);
+    EXPECT_EQ(result->counts.source_isolated_points, sequential.counts.source_isolated_points);
+    EXPECT_EQ(result->counts.target_isolated_points, sequential.counts.target_isolated_points);
+    ASSERT_TRUE(result->half_turn.has_value());
+    EXPECT_EQ(result->half_turn->answer_overlap, sequential.half_turn->answer_overlap);
+    EXPECT_EQ(result->timings_ms.count("dense_preparation"), 1u);
+  }
 }
 
 TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
