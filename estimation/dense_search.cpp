@@ -418,6 +418,7 @@ void validate_dense_search_options(const DenseSearchOptions& options) {
   if (!(options.refine_band >= 0.0)) fail("refine_band", "non-negative", options.refine_band);
   if (options.max_refined < 1) fail("max_refined", "at least 1", static_cast<double>(options.max_refined));
   if (!(options.decisive_margin >= 0.0)) fail("decisive_margin", "non-negative", options.decisive_margin);
+  if (!(options.ok_margin >= 0.0)) fail("ok_margin", "non-negative", options.ok_margin);
   if (!(options.minimum_overlap >= 0.0 && options.minimum_overlap <= 1.0)) fail("minimum_overlap", "in [0, 1]", options.minimum_overlap);
   if (options.normal_neighbours < 3) fail("normal_neighbours", "at least 3", static_cast<double>(options.normal_neighbours));
   if (options.source_samples < 6) fail("source_samples", "at least 6", static_cast<double>(options.source_samples));

@@ -42,13 +42,14 @@ struct DenseSearchOptions {
   std::size_t max_refined = 12;          ///< at most this many (the best first); more in the band leaves the search unsettled
   double minimum_overlap = 0.4;          ///< and put at least this fraction of the source on the target (wrong settles measured 0.23-0.33, right ones 0.44-0.79)
   double decisive_margin = 0.03;         ///< the winner's overlap must beat every distinct optimum's by this to be `ok` (about 2.5 standard errors of a difference of two fractions over the same 3,000 samples)
+  double ok_margin = 0.03;               ///< a winner that settles must also beat them by this to be `ok`, else it is the answer, `ambiguous` (at or below decisive_margin: no effect). The avia preset: 0.13, set on a simulated Livox tuning set (docs/registration.md, known failures)
   GroundCorrelationOptions correlation;  ///< register_clouds also starts ICP from the poses of the correlation over yaw and ground translation (correlation.poses 0: none)
 };
 
 /// Throws quadrix::Error naming the first option out of range (e.g. "option 'dense_search.voxel_size'
 /// must be positive, got 0"): voxel_size, correspondence_distance, step, across_step and
 /// step_with_correlation positive, range, across_range, range_with_correlation,
-/// across_range_with_correlation, refine_band and decisive_margin not negative, minimum_overlap in [0, 1],
+/// across_range_with_correlation, refine_band, decisive_margin and ok_margin not negative, minimum_overlap in [0, 1],
 /// max_refined at least 1, normal_neighbours at least 3, source_samples at least 6; then the
 /// correlation's options (validate_ground_correlation_options).
 void validate_dense_search_options(const DenseSearchOptions& options);

@@ -92,7 +92,7 @@ RegistrationStatus decide_registration_status(const RegistrationFindings& findin
   if (findings.estimation_failure) return *findings.estimation_failure;
   const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
   const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little && !findings.half_turn_rival &&
-                    !findings.half_turn_unclear &&
+                    !findings.half_turn_unclear && !findings.dense_search_unclear &&
                     !findings.overlap_unconfirmed;
   return sure && fits ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
 }
@@ -499,6 +499,7 @@ std::string describe_dense_search(const DenseSearchResult& search, const Registr
   }
   if (settled) {
     why << ": settled (margin " << search.margin << ")";
+    if (search.margin < options.ok_margin) why << ", within the margin " << options.ok_margin << " an ok answer needs here, not sure";
     return why.str();
   }
   // Not settled: the points do not single out an optimum either, so the quadric answer stands.
@@ -594,6 +595,7 @@ void settle_with_dense_search(RegistrationResult& result, const DenseSearchPair&
   result.message += describe_dense_search(search, result, settled, options.dense_search);
   result.dense_search = search;
   result.findings.settled_by_dense_search = settled;
+  result.findings.dense_search_unclear = settled && search.margin < options.dense_search.ok_margin;
   if (!settled) {
     // A clear winner that lands too little of the source to be called `ok` (outliers and low
     // overlap keep it below the floor) is still a better guess than the quadric answer it beat: it

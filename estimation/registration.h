@@ -141,6 +141,7 @@ struct RegistrationFindings {
   bool overlaps_too_little = false;       ///< the answer lands less of the source on the target than AmbiguityOptions::minimum_overlap
   bool overlap_unconfirmed = false;       ///< the answer lands less than AmbiguityOptions::confirm_below, or less than confirm_over_identity more than not moving, and no dense search has settled it
   bool settled_by_dense_search = false;   ///< the dense search replaced an unsure answer by a clear winner
+  bool dense_search_unclear = false;      ///< that winner beats its best distinct optimum by less than DenseSearchOptions::ok_margin
   bool half_turn_rival = false;           ///< the answer turned half a turn about the up axis fits the points about as well (check_half_turn)
   bool half_turn_unclear = false;         ///< the answer beats that rival by less than AmbiguityOptions::half_turn_ok_margin
   bool replaced_by_half_turn = false;     ///< the half-turned rival fitted clearly better and became the answer (check_half_turn)

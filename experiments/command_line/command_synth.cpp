@@ -28,6 +28,7 @@ struct SynthCommandOptions {
   std::optional<double> noise;         ///< range noise sigma override, metres
   std::optional<double> dropout;       ///< dropout probability override
   std::string foliage = "solid";       ///< street vegetation: solid or porous (crowns and hedges)
+  std::string second_pass = "opposite";  ///< loop-closures: the second drive's direction, opposite or same
   bool list = false;                   ///< list scenes and sensors, then exit
   LoopClosureSetOptions loop_set;      ///< loop-closures only: streets, pairs per bin, scan spacing
 };
@@ -37,7 +38,8 @@ void print_listing() {
   for (const auto& name : scene_names()) std::printf("  %-9s %s\n", name.c_str(), scene_description(name).c_str());
   std::printf("  %-9s %s\n", "loop-closures",
               "benchmark set, not a scene: --streets street layouts from --seed on, each driven twice (the second "
-              "pass the other way, with other parked cars and pedestrians), --pairs-per-bin pairs per street in each "
+              "pass the other way unless --second-pass same, with other parked cars and pedestrians), --pairs-per-bin "
+              "pairs per street in each "
               "of the bins 0-10, 10-20, 20-30 m; writes pairs.tsv for quadrix bench");
   std::printf("sensors:\n");
   for (const auto& name : sensor_names()) {
@@ -69,6 +71,9 @@ void run_command(const SynthCommandOptions& options) {
     LoopClosureSetOptions loop_set = options.loop_set;
     loop_set.first_seed = options.seed;
     loop_set.street.foliage = foliage_from_name(options.foliage, "--foliage");
+    if (options.second_pass != "opposite" && options.second_pass != "same")
+      throw Error("--second-pass: expected opposite or same, got '" + options.second_pass + "'");
+    loop_set.same_direction = options.second_pass == "same";
     loop_set.sensor = sensor;
     const auto start = std::chrono::steady_clock::now();
     const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(options.out, loop_set);
@@ -81,6 +86,7 @@ void run_command(const SynthCommandOptions& options) {
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), options.out.c_str());
     return;
   }
+  if (options.second_pass != "opposite") throw Error("--second-pass applies to loop-closures only");
   SyntheticOutputOptions output;
   if (options.format == "ply") {
     output.cloud_format = CloudFormat::Ply;
@@ -139,6 +145,10 @@ const CommandRegistration registration(20, [](CLI::App& app) {
   command->add_option("--pairs-per-bin", options->loop_set.pairs_per_bin, "loop-closures: pairs per street and distance bin")
       ->capture_default_str();
   command->add_option("--scan-spacing", options->loop_set.scan_spacing, "loop-closures: metres between scans of a pass")
+      ->capture_default_str();
+  command->add_option("--second-pass", options->second_pass,
+                      "loop-closures: the second drive goes the opposite way or the same way (forward-looking sensors such as "
+                      "the Livox share no view with an opposite pass)")
       ->capture_default_str();
   command->callback([options] { run_command(*options); });
 });

@@ -145,6 +145,7 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                               {"best", search.best},
                               {"rival", search.rival ? nlohmann::json(*search.rival) : nlohmann::json(nullptr)},
                               {"margin", search.margin},
+                              {"demoted", result.findings.dense_search_unclear},
                               {"unrefined_contenders", search.unrefined_contenders},
                               {"best_in_searched_region", search.best_in_searched_region},
                               {"source_points", search.source_points},

@@ -56,7 +56,7 @@ std::vector<LoopClosureSetPair> write_loop_closure_set(const std::string& direct
     const std::string street_folder = "street_" + std::to_string(seed);
     std::filesystem::create_directories(root / street_folder);
     const StreetPass first = make_street_pass(seed, 1, options.scan_spacing, options.street);
-    const StreetPass second = make_street_pass(seed, 2, options.scan_spacing, options.street);
+    const StreetPass second = make_street_pass(seed, options.same_direction ? 3 : 2, options.scan_spacing, options.street);
     // Each pass is its own drive: its own noise and dropout stream.
     const SyntheticRun first_run = run_synthetic(first.scene, sensor, first.poses, seed * 2 + 1);
     const SyntheticRun second_run = run_synthetic(second.scene, sensor, second.poses, seed * 2 + 2);

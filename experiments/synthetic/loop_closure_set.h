@@ -1,5 +1,6 @@
 // A synthetic loop-closure benchmark in the paper's distance bins: street layouts driven twice, the
-// second pass in the opposite direction with other parked cars and pedestrians, and pairs between
+// second pass in the opposite direction (or, for forward-looking sensors, the same one) with other
+// parked cars and pedestrians, and pairs between
 // the passes binned by the distance between the scans (paper §"Loop closure", KITTI bins 0-10,
 // 10-20, 20-30 m). `quadrix bench --pairs DIR/pairs.tsv` runs it; its summary reports success per bin.
 #pragma once
@@ -23,6 +24,7 @@ struct LoopClosureSetOptions {
   int pairs_per_bin = 20;           ///< pairs drawn per street and bin (fewer when a bin has fewer)
   std::vector<std::pair<double, double>> bins{{0.0, 10.0}, {10.0, 20.0}, {20.0, 30.0}};  ///< [min, max) distance bins, m
   StreetOptions street;             ///< options of every street layout (solid or porous foliage)
+  bool same_direction = false;      ///< the second pass drives the first one's way (make_street_pass pass 3): a forward-looking sensor shares no view with a pass the other way
 };
 
 /// One pair of the set, as written to pairs.tsv.

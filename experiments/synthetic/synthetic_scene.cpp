@@ -800,7 +800,8 @@ StreetPass make_street_pass(std::uint64_t seed, int pass, double scan_spacing, c
 
   const bool forward = pass % 2 == 1;
   const double lane = (forward ? -0.5 : 0.5) * measures.road_half_width;
-  for (double along = -48.0 + (forward ? 0.0 : 0.5 * scan_spacing); along <= 48.0 + 1e-9; along += scan_spacing) {
+  // Every pass after the first starts half a spacing later, so no scan repeats a first-pass position.
+  for (double along = -48.0 + (pass == 1 ? 0.0 : 0.5 * scan_spacing); along <= 48.0 + 1e-9; along += scan_spacing) {
     const double x = forward ? along : -along;
     const double yaw = (forward ? 0.0 : kPi) + degrees(random.uniform(-4.0, 4.0));
     result.poses.push_back(vehicle_pose(x, lane + random.uniform(-0.5, 0.5), 1.73, yaw, measures.gradient));

@@ -122,8 +122,8 @@ struct StreetPass {
 /// A drive along make_street_scene(seed, options): the same road, buildings, poles and trees, with the parked
 /// cars re-drawn (each kept with probability 0.5, new ones in free kerb space) and 6-14 pedestrians,
 /// all drawn from (seed, pass). Odd passes drive +x in the right lane, even passes -x in the left lane
-/// (the opposite direction); one scan every `scan_spacing` metres for x in [-48, 48] (even passes offset
-/// by half a spacing), each with +-0.5 m of lateral and +-4 degrees of heading jitter. Throws
+/// (the opposite direction); one scan every `scan_spacing` metres for x in [-48, 48] (passes after the
+/// first offset by half a spacing), each with +-0.5 m of lateral and +-4 degrees of heading jitter. Throws
 /// quadrix::Error when pass < 1 or scan_spacing is not positive.
 StreetPass make_street_pass(std::uint64_t seed, int pass, double scan_spacing, const StreetOptions& options = {});
 /// Long straight road between continuous barriers and noise walls with evenly spaced poles and no

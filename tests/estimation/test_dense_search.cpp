@@ -272,6 +272,22 @@ TEST(DenseSearch, RepeatingWallWithCurvedEndIsSettledAtTheTruth) {
     EXPECT_GE(search.margin, options.dense_search.decisive_margin);
     EXPECT_GT(result.timings_ms.at("dense_search"), 0.0);
     EXPECT_GT(translation_error(wrong, truth), 4.9);
+    if (trial > 0) continue;
+    // A preset that asks a settled answer to win by more than this one did keeps it as the answer,
+    // `ambiguous`; asking for less leaves it `ok`.
+    for (const double asked : {search.margin + 0.01, std::max(options.dense_search.decisive_margin, search.margin - 0.01)}) {
+      RegistrationResult again;
+      again.status = RegistrationStatus::Ambiguous;
+      again.transform = wrong;
+      set_ground(again);
+      RegistrationOptions demanding = options;
+      demanding.dense_search.ok_margin = asked;
+      verify_registration(again, pair.source, pair.target, demanding);
+      const bool unclear = asked > search.margin;
+      EXPECT_EQ(again.findings.dense_search_unclear, unclear) << again.message;
+      EXPECT_EQ(again.status, unclear ? RegistrationStatus::Ambiguous : RegistrationStatus::Ok) << again.message;
+      EXPECT_TRUE(again.transform.isApprox(result.transform, 1e-12)) << "the settled answer stays the answer";
+    }
   }
 }
 
@@ -472,6 +488,9 @@ TEST(DenseSearch, OptionsOutOfRangeAreNamed) {
   options = DenseSearchOptions{};
   options.across_range_with_correlation = -1.0;
   EXPECT_NE(message(options).find("'dense_search.across_range_with_correlation'"), std::string::npos) << message(options);
+  options = DenseSearchOptions{};
+  options.ok_margin = -0.01;
+  EXPECT_NE(message(options).find("'dense_search.ok_margin' must be non-negative"), std::string::npos) << message(options);
   options = DenseSearchOptions{};
   options.voxel_size = -0.1;
   PointCloud cloud;

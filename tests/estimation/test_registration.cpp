@@ -203,6 +203,12 @@ TEST(DecideRegistrationStatus, OkOnlyWhenSureAndFittingAtLeastAsWellAsNotMoving)
   // A half-turned rival about as good as the answer leaves it unsure, settled or not.
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.half_turn_rival = true; }), RegistrationStatus::Ambiguous);
   EXPECT_EQ(status_of([](RegistrationFindings& f) { f.half_turn_unclear = true; }), RegistrationStatus::Ambiguous);
+  // A settled winner that beats its rival by less than the preset's ok margin stays unsure.
+  EXPECT_EQ(status_of([](RegistrationFindings& f) {
+              f.settled_by_dense_search = true;
+              f.dense_search_unclear = true;
+            }),
+            RegistrationStatus::Ambiguous);
   EXPECT_EQ(status_of([](RegistrationFindings& f) {
               f.settled_by_dense_search = true;
               f.half_turn_rival = true;

@@ -76,6 +76,18 @@ TEST(StreetPass, KeepsTheStreetAndChangesCarsAndPedestrians) {
   EXPECT_THROW(make_street_pass(1, 1, 0.0), Error);
 }
 
+// A third pass drives the first one's way, half a spacing later, with its own parked cars.
+TEST(StreetPass, AThirdPassDrivesTheFirstOnesWayBetweenItsScans) {
+  const std::uint64_t seed = 3;
+  const StreetPass first = make_street_pass(seed, 1, 3.0);
+  const StreetPass third = make_street_pass(seed, 3, 3.0);
+  EXPECT_NE(names_of(first.scene, SemanticLabel::Car), names_of(third.scene, SemanticLabel::Car));
+  ASSERT_EQ(third.poses.size(), 32u);
+  for (const Eigen::Isometry3d& pose : third.poses) EXPECT_GT(pose.linear().col(0).x(), std::cos(5.0 * kPi / 180.0));
+  for (std::size_t i = 0; i < third.poses.size(); ++i)
+    EXPECT_NEAR(third.poses[i].translation().x() - first.poses[i].translation().x(), 1.5, 1e-9);
+}
+
 TEST(LoopClosureSet, PairsLieInTheirBinsWithExactGroundTruth) {
   const fs::path folder = fs::temp_directory_path() / ("quadrix_loop_set_" + std::to_string(::getpid()));
   fs::remove_all(folder);
@@ -122,6 +134,28 @@ TEST(LoopClosureSet, PairsLieInTheirBinsWithExactGroundTruth) {
   fs::remove_all(folder);
 }
 
+
+// With the second pass driving the same way (forward-looking sensors), every pair faces one way.
+TEST(LoopClosureSet, ASecondPassTheSameWayGivesPairsFacingOneWay) {
+  const fs::path folder = fs::temp_directory_path() / ("quadrix_loop_set_same_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  LoopClosureSetOptions options;
+  options.first_seed = 5;
+  options.streets = 1;
+  options.scan_spacing = 8.0;
+  options.pairs_per_bin = 3;
+  options.same_direction = true;
+  const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(folder.string(), options);
+  std::map<std::string, int> per_bin;
+  for (const LoopClosureSetPair& pair : pairs) {
+    ++per_bin[pair.bin];
+    EXPECT_LT(pair.rotation, 10.0) << pair.id;  // heading jitter of +-4 deg on each pass
+    const Eigen::Isometry3d truth = read_pose_matrix((folder / pair.truth).string());
+    EXPECT_NEAR(truth.translation().norm(), pair.distance, 0.01) << pair.id;
+  }
+  EXPECT_EQ(per_bin, (std::map<std::string, int>{{"0-10", 3}, {"10-20", 3}, {"20-30", 3}}));
+  fs::remove_all(folder);
+}
 
 // A pair as write_loop_closure_set draws it: street `seed`, its pass-2 scan `source_scan` turned by
 // `yaw_degrees` about the up axis (as `quadrix bench --yaw-range` turns a source) against its pass-1

@@ -158,6 +158,8 @@ TEST(RegistrationConfig, PresetsKeepTheirValues) {
   EXPECT_DOUBLE_EQ(avia.source_extraction.planes.merge_distance, 0.22);
   EXPECT_DOUBLE_EQ(avia.target_extraction.planes.eigenvalue_ratio, 20.0);
   EXPECT_DOUBLE_EQ(avia.source_extraction.planes.cluster_plane_area, 2.0);
+  EXPECT_DOUBLE_EQ(avia.dense_search.ok_margin, 0.13);
+  EXPECT_DOUBLE_EQ(mid360.dense_search.ok_margin, DenseSearchOptions{}.ok_margin);
   const RegistrationOptions monument = registration_preset("monument");
   EXPECT_TRUE(monument.source_extraction.static_scan);
   EXPECT_DOUBLE_EQ(monument.target_extraction.maximum_range, 0.0);
