@@ -88,14 +88,20 @@ TEST(StreetPass, AThirdPassDrivesTheFirstOnesWayBetweenItsScans) {
     EXPECT_NEAR(third.poses[i].translation().x() - first.poses[i].translation().x(), 1.5, 1e-9);
 }
 
-TEST(LoopClosureSet, PairsLieInTheirBinsWithExactGroundTruth) {
-  const fs::path folder = fs::temp_directory_path() / ("quadrix_loop_set_" + std::to_string(::getpid()));
-  fs::remove_all(folder);
+// One street, few scans (13 + 12), 4 + 8k m apart along it: every bin has pairs; three drawn a bin.
+LoopClosureSetOptions small_set_options() {
   LoopClosureSetOptions options;
   options.first_seed = 5;
   options.streets = 1;
-  options.scan_spacing = 8.0;  // few scans (13 + 12), 4 + 8k m apart along the street: every bin has pairs
+  options.scan_spacing = 8.0;
   options.pairs_per_bin = 3;
+  return options;
+}
+
+TEST(LoopClosureSet, PairsLieInTheirBinsWithExactGroundTruth) {
+  const fs::path folder = fs::temp_directory_path() / ("quadrix_loop_set_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  const LoopClosureSetOptions options = small_set_options();
   const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(folder.string(), options);
   std::map<std::string, int> per_bin;
   for (const LoopClosureSetPair& pair : pairs) ++per_bin[pair.bin];
@@ -139,11 +145,7 @@ TEST(LoopClosureSet, PairsLieInTheirBinsWithExactGroundTruth) {
 TEST(LoopClosureSet, ASecondPassTheSameWayGivesPairsFacingOneWay) {
   const fs::path folder = fs::temp_directory_path() / ("quadrix_loop_set_same_" + std::to_string(::getpid()));
   fs::remove_all(folder);
-  LoopClosureSetOptions options;
-  options.first_seed = 5;
-  options.streets = 1;
-  options.scan_spacing = 8.0;
-  options.pairs_per_bin = 3;
+  LoopClosureSetOptions options = small_set_options();
   options.same_direction = true;
   const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(folder.string(), options);
   std::map<std::string, int> per_bin;
