@@ -494,6 +494,7 @@ std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, co
   static constexpr double kCoarseStep = 2.0;
   static constexpr std::size_t kSamples = 300, kRefined = 16;
   static constexpr std::size_t kMaximumCells = std::size_t(1) << 31;  // 256 MB of bits: a scan hundreds of metres across
+  if (count == 0) return {};
   const auto above = [&](const std::optional<Eigen::Vector4d>& ground, const Eigen::Vector3d& point) {
     return !ground || std::abs(ground->head<3>().dot(point) + (*ground)(3)) >= kGroundClearance;
   };
@@ -541,7 +542,6 @@ std::vector<Eigen::Vector3d> correlate_translations(const PointCloud& source, co
     const double stride = static_cast<double>(kept.size()) / static_cast<double>(sample_count);
     for (std::size_t k = 0; k < sample_count; ++k) samples.push_back(rotation * source.point(kept[static_cast<std::size_t>(k * stride)]));
   };
-  if (count == 0) return {};
   tbb::parallel_invoke(grid_target, sample_source);
   if (!target_fits || samples.empty()) return {};
   const auto score_of = [&](const Eigen::Vector3d& translation) {

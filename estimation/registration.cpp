@@ -482,7 +482,8 @@ bool clear_winner_below_floor(const DenseSearchResult& search, const DenseSearch
 }
 
 // The dense search's account for the message: direction, both optima, margin, and what failed.
-std::string describe_dense_search(const DenseSearchResult& search, const RegistrationResult& result, bool settled,
+// `result` holds the quadric answer and the search's findings.
+std::string describe_dense_search(const DenseSearchResult& search, const RegistrationResult& result,
                                   const DenseSearchOptions& options) {
   const DenseOptimum& best = search.optima[search.best];
   std::ostringstream why;
@@ -497,9 +498,10 @@ std::string describe_dense_search(const DenseSearchResult& search, const Registr
   } else {
     why << ", every start reached it";
   }
-  if (settled) {
+  if (result.findings.settled_by_dense_search) {
     why << ": settled (margin " << search.margin << ")";
-    if (search.margin < options.ok_margin) why << ", within the margin " << options.ok_margin << " an ok answer needs here, not sure";
+    if (result.findings.dense_search_unclear)
+      why << ", within the margin " << options.ok_margin << " an ok answer needs here, not sure";
     return why.str();
   }
   // Not settled: the points do not single out an optimum either, so the quadric answer stands.
@@ -592,10 +594,10 @@ void settle_with_dense_search(RegistrationResult& result, const DenseSearchPair&
       prepared, result.transform, other_starts, global_starts, up, ground_of(result.source_model),
       options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
   const bool settled = dense_search_settles(search, options.dense_search);
-  result.message += describe_dense_search(search, result, settled, options.dense_search);
-  result.dense_search = search;
   result.findings.settled_by_dense_search = settled;
   result.findings.dense_search_unclear = settled && search.margin < options.dense_search.ok_margin;
+  result.message += describe_dense_search(search, result, options.dense_search);
+  result.dense_search = search;
   if (!settled) {
     // A clear winner that lands too little of the source to be called `ok` (outliers and low
     // overlap keep it below the floor) is still a better guess than the quadric answer it beat: it
@@ -761,10 +763,20 @@ CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, c
   };
   const ExtractionResult* source_chosen = chosen_by(source_extraction, source, options.source_extraction);
   const ExtractionResult* target_chosen = chosen_by(target_extraction, target, options.target_extraction);
-  const auto select = [](const PointCloud& cloud, const std::vector<std::uint32_t>& indices) {
-    PointCloud selected;
-    selected.positions = cloud.positions(Eigen::all, indices);
-    return selected;
+  // A side's points: the extraction's own, else cropped and, when `filter`, without isolated points.
+  const auto points_of = [&](const PointCloud& cloud, const ExtractionResult* chosen, const ExtractionOptions& side,
+                             bool filter, std::size_t& isolated) {
+    if (chosen) {
+      isolated = chosen->isolated_points;
+      PointCloud selected;
+      selected.positions = cloud.positions(Eigen::all, chosen->measured.indices);
+      return selected;
+    }
+    PointCloud cropped = crop_to_range(cloud, side);
+    const std::size_t in_range = cropped.size();
+    if (filter) cropped = without_isolated_points(cropped, cell, neighbours);
+    isolated = in_range - cropped.size();
+    return cropped;
   };
   CheckInputs inputs;
   const Clock::time_point start = Clock::now();
@@ -772,30 +784,17 @@ CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, c
   // overlap's own distance (the default), that hash's cells also tell the isolated target points.
   tbb::parallel_invoke(
       [&] {
-        if (source_chosen) {
-          inputs.source = select(source, source_chosen->measured.indices);
-          inputs.source_isolated_points = source_chosen->isolated_points;
-          return;
-        }
-        inputs.source = crop_to_range(source, options.source_extraction);
-        const std::size_t in_range = inputs.source.size();
-        if (cell > 0.0) inputs.source = without_isolated_points(inputs.source, cell, neighbours);
-        inputs.source_isolated_points = in_range - inputs.source.size();
+        inputs.source = points_of(source, source_chosen, options.source_extraction, cell > 0.0, inputs.source_isolated_points);
       },
       [&] {
-        if (target_chosen) {
-          inputs.target = select(target, target_chosen->measured.indices);
-          inputs.coverage.emplace(inputs.target, distance);
-          inputs.target_isolated_points = target_chosen->isolated_points;
-          return;
-        }
-        inputs.target = crop_to_range(target, options.target_extraction);
-        const std::size_t in_range = inputs.target.size();
-        if (cell > 0.0 && cell != distance) inputs.target = without_isolated_points(inputs.target, cell, neighbours);
+        const bool hash_tells_isolated = !target_chosen && cell == distance;
+        inputs.target = points_of(target, target_chosen, options.target_extraction, cell > 0.0 && !hash_tells_isolated,
+                                  inputs.target_isolated_points);
         inputs.coverage.emplace(inputs.target, distance);
-        if (cell == distance)
-          inputs.target.positions = inputs.target.positions(Eigen::all, inputs.coverage->leave_out_isolated_points(neighbours)).eval();
-        inputs.target_isolated_points = in_range - inputs.target.size();
+        if (!hash_tells_isolated) return;
+        const std::size_t hashed = inputs.target.size();
+        inputs.target.positions = inputs.target.positions(Eigen::all, inputs.coverage->leave_out_isolated_points(neighbours)).eval();
+        inputs.target_isolated_points += hashed - inputs.target.size();
       });
   inputs.inputs_ms = elapsed_ms(start);
   if (prepare_search && !inputs.source.empty() && !inputs.target.empty()) {
@@ -818,7 +817,7 @@ void verify_prepared(RegistrationResult& result, const CheckInputs& inputs, cons
   // `ambiguous`, and the dense search then gets its chance too.
   check_overlap_against(result, cropped_source, *inputs.coverage, options.ambiguity);
   const bool searches =
-      (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) && inputs.prepared;
+      (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) && inputs.prepared.has_value();
   if (!searches) return;
   const DenseSearchPair& prepared = *inputs.prepared;
   check_half_turn(result, cropped_source, cropped_target, options, true, &prepared);
