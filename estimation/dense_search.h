@@ -42,7 +42,7 @@ struct DenseSearchOptions {
   std::size_t max_refined = 12;          ///< at most this many (the best first); more in the band leaves the search unsettled
   double minimum_overlap = 0.4;          ///< and put at least this fraction of the source on the target (wrong settles measured 0.23-0.33, right ones 0.44-0.79)
   double decisive_margin = 0.03;         ///< the winner's overlap must beat every distinct optimum's by this to be `ok` (about 2.5 standard errors of a difference of two fractions over the same 3,000 samples)
-  double ok_margin = 0.03;               ///< a winner that settles must also beat them by this to be `ok`, else it is the answer, `ambiguous` (at or below decisive_margin: no effect). The avia preset: 0.13, set on a simulated Livox tuning set (docs/registration.md, known failures)
+  double ok_margin = 0.03;               ///< a winner that settles must also beat them by this to be `ok`, else it is the answer, `ambiguous` (at or below decisive_margin: no effect)
   GroundCorrelationOptions correlation;  ///< register_clouds also starts ICP from the poses of the correlation over yaw and ground translation (correlation.poses 0: none)
 };
 

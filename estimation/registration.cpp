@@ -93,7 +93,7 @@ RegistrationStatus decide_registration_status(const RegistrationFindings& findin
   const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
   const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little && !findings.half_turn_rival &&
                     !findings.half_turn_unclear && !findings.dense_search_unclear &&
-                    !findings.overlap_unconfirmed;
+                    !findings.overlap_unconfirmed && !findings.in_free_space;
   return sure && fits ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
 }
 
@@ -722,6 +722,34 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
   });
 }
 
+void check_free_space(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                      const RangeImage& source_image, const RangeImage& target_image, const AmbiguityOptions& options) {
+  const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
+  if (result.status != RegistrationStatus::Ok || options.free_space_limit < 0.0 || !source_ground || !target_ground) return;
+  // Fewer tested points than this on either side judge nothing: a share of a few dozen points
+  // moves by tenths with a single car.
+  constexpr std::size_t kMinimumTested = 100;
+  timed(result, "free_space", [&] {
+    const FreeSpaceMeasure measure = measure_free_space(source, target, source_image, target_image, result.transform,
+                                                        *source_ground, *target_ground, options.free_space_height);
+    result.free_space = measure;
+    std::ostringstream why;
+    why.precision(3);
+    why << "; free space: " << measure.source_in_target_free_space << " of " << measure.source_tested
+        << " source points in the target sensor's, " << measure.target_in_source_free_space << " of "
+        << measure.target_tested << " target points in the source sensor's";
+    if (measure.source_tested < kMinimumTested || measure.target_tested < kMinimumTested) {
+      why << ": too few points tested (fewer than " << kMinimumTested << " a side) to judge";
+    } else {
+      why << " (sum " << measure.sum() << ", limit " << options.free_space_limit << ")";
+      result.findings.in_free_space = measure.sum() > options.free_space_limit;
+      if (result.findings.in_free_space) why << ": more than the limit, not sure";
+    }
+    result.message += why.str();
+    decide(result);
+  });
+}
+
 namespace {
 
 // What every check of an answer measures, prepared before the answer is known: it depends on the
@@ -730,6 +758,7 @@ struct CheckInputs {
   PointCloud source, target;               // within the extraction's range, isolated points left out
   std::optional<TargetCoverage> coverage;  // the target hashed at measure_overlap's distance
   std::optional<DenseSearchPair> prepared; // both prepared for the ICP searches, when one may run
+  std::optional<RangeImage> source_image, target_image;  // what each sensor saw, when the free-space check may run
   std::size_t source_isolated_points = 0, target_isolated_points = 0;
   double inputs_ms = 0.0, preparation_ms = 0.0;
 };
@@ -779,22 +808,26 @@ CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, c
     return cropped;
   };
   CheckInputs inputs;
+  const bool free_space = options.ambiguity.free_space_limit >= 0.0;
   const Clock::time_point start = Clock::now();
   // The target is hashed once, for every overlap measured after. When the isolation cube is the
   // overlap's own distance (the default), that hash's cells also tell the isolated target points.
   tbb::parallel_invoke(
       [&] {
         inputs.source = points_of(source, source_chosen, options.source_extraction, cell > 0.0, inputs.source_isolated_points);
+        if (free_space) inputs.source_image.emplace(inputs.source, options.source_extraction.sensor_origin);
       },
       [&] {
         const bool hash_tells_isolated = !target_chosen && cell == distance;
         inputs.target = points_of(target, target_chosen, options.target_extraction, cell > 0.0 && !hash_tells_isolated,
                                   inputs.target_isolated_points);
         inputs.coverage.emplace(inputs.target, distance);
-        if (!hash_tells_isolated) return;
-        const std::size_t hashed = inputs.target.size();
-        inputs.target.positions = inputs.target.positions(Eigen::all, inputs.coverage->leave_out_isolated_points(neighbours)).eval();
-        inputs.target_isolated_points += hashed - inputs.target.size();
+        if (hash_tells_isolated) {
+          const std::size_t hashed = inputs.target.size();
+          inputs.target.positions = inputs.target.positions(Eigen::all, inputs.coverage->leave_out_isolated_points(neighbours)).eval();
+          inputs.target_isolated_points += hashed - inputs.target.size();
+        }
+        if (free_space) inputs.target_image.emplace(inputs.target, options.target_extraction.sensor_origin);
       });
   inputs.inputs_ms = elapsed_ms(start);
   if (prepare_search && !inputs.source.empty() && !inputs.target.empty()) {
@@ -805,8 +838,8 @@ CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, c
   return inputs;
 }
 
-// verify_registration on inputs prepare_checks made for these clouds and options.
-void verify_prepared(RegistrationResult& result, const CheckInputs& inputs, const RegistrationOptions& options) {
+// The checks before the free-space check, on inputs prepare_checks made for these clouds and options.
+void check_answer(RegistrationResult& result, const CheckInputs& inputs, const RegistrationOptions& options) {
   result.timings_ms["check_inputs"] += inputs.inputs_ms;
   if (inputs.prepared) result.timings_ms["dense_preparation"] += inputs.preparation_ms;
   result.counts.source_isolated_points = inputs.source_isolated_points;
@@ -844,6 +877,13 @@ void verify_prepared(RegistrationResult& result, const CheckInputs& inputs, cons
     check_overlap_against(result, cropped_source, *inputs.coverage, options.ambiguity);
     check_half_turn(result, cropped_source, cropped_target, options, true, &prepared);
   }
+}
+
+// verify_registration on inputs prepare_checks made for these clouds and options.
+void verify_prepared(RegistrationResult& result, const CheckInputs& inputs, const RegistrationOptions& options) {
+  check_answer(result, inputs, options);
+  if (inputs.source_image && inputs.target_image)
+    check_free_space(result, inputs.source, inputs.target, *inputs.source_image, *inputs.target_image, options.ambiguity);
 }
 
 }  // namespace

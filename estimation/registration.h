@@ -13,6 +13,7 @@
 
 #include "estimation/candidate_selection.h"
 #include "estimation/dense_search.h"
+#include "estimation/free_space.h"
 #include "estimation/overlap.h"
 #include "estimation/refiner.h"
 #include "fitting/extraction.h"
@@ -73,12 +74,14 @@ struct AmbiguityOptions {
   double isolation_cell = 0.3;                ///< the checks (overlap, half turn, correlation over the ground, dense search) leave out points with no other point in their cube of this edge or the 26 around it, m (without_isolated_points; 0: keep every point)
   int isolation_neighbours = 1;               ///< ... or with fewer than this many other points there (at least 1)
   double half_turn_margin = 0.03;             ///< an `ok` answer must put more of the source on the target than the best ICP optimum reached from its half turn (check_half_turn), by this fraction, else `ambiguous` (negative: no check)
-  double half_turn_ok_margin = 0.03;         ///< an `ok` answer must also out-overlap that rival by this fraction, else `ambiguous` (the answer is kept; below half_turn_margin it has no effect). The vlp16 preset: 0.22, set on the VLP-16 tuning set, whose `ok` and wrong mirror images beat their rival by at most 0.213
+  double half_turn_ok_margin = 0.03;         ///< an `ok` answer must also out-overlap that rival by this fraction, else `ambiguous` (the answer is kept; below half_turn_margin it has no effect)
   bool adopt_icp_optimum = true;              ///< an answer that passes the half-turn check becomes the point-to-plane ICP optimum reached from it
   std::size_t half_turn_samples = 1500;       ///< source points the half-turn check's ICP aligns (dense_search.source_samples, 3,000, is for settling): half as many cut the check from about 100 to 80 ms a KITTI pair and changed no status on the loop-closure sets or pairs.tsv (docs/registration.md)
   std::size_t half_turn_votes = 8;            ///< ICP also starts from the half-turned rotation at this many translations the quadrics vote for (the axis of the turn is not known)
   std::size_t half_turn_correlation_starts = 3;  ///< ICP also starts from the half-turned rotation at this many translations that land the most source points in space the target occupies (correlate_translations; 0: none)
   double half_turn_correlation_reach = 40.0;     ///< those translations are searched this far, m, along the ground from the turned answer's: a street's mirror image can lie anywhere along it
+  double free_space_limit = 0.18;             ///< an `ok` answer may put at most this share of each scan's high points in the other sensor's free space, the two shares summed (check_free_space), else `ambiguous` (the answer is kept; negative: no check). The clouds must be in their sensors' frames (ExtractionOptions::sensor_origin); the monument preset, whose stations are merged, turns it off. The middle of the gap on the simulated tuning sets (seeds 1001-1005: HDL-64E as drawn and under random yaw, VLP-16, Livox with both passes one way: 1,200 runs, with the other `ok` margins at their defaults), where the 931 right `ok` answers summed at most 0.087 and the 41 wrong ones at least 0.271 (docs/registration.md, "Free space")
+  double free_space_height = 2.0;             ///< the free-space check tests points standing more than this above their scan's ground, m: cars and people that moved between the scans stand lower (at 0.5 m, right answers of the HDL-64E tuning set summed up to 0.63, parked cars that differ between the passes)
 };
 
 /// Every option of register_clouds; defaults are the paper's (§"Implementation Details").
@@ -145,6 +148,7 @@ struct RegistrationFindings {
   bool half_turn_rival = false;           ///< the answer turned half a turn about the up axis fits the points about as well (check_half_turn)
   bool half_turn_unclear = false;         ///< the answer beats that rival by less than AmbiguityOptions::half_turn_ok_margin
   bool replaced_by_half_turn = false;     ///< the half-turned rival fitted clearly better and became the answer (check_half_turn)
+  bool in_free_space = false;             ///< the answer puts more points in the other sensor's free space than AmbiguityOptions::free_space_limit (check_free_space)
 };
 
 /// The half-turn check of an answer (check_half_turn): how well the answer and its mirror image fit.
@@ -183,6 +187,7 @@ struct RegistrationResult {
   std::optional<DenseSearchResult> dense_search;                ///< the search along the weakest direction, when an ambiguous answer ran it
   std::vector<GroundPose> ground_correlation;                   ///< the correlation over the ground's poses, best first, which the dense search started from (empty when it did not run)
   std::optional<HalfTurnCheck> half_turn;                       ///< the last half-turn check (check_half_turn), when one ran
+  std::optional<FreeSpaceMeasure> free_space;                   ///< the free-space check of the final answer (check_free_space), when it ran
 };
 
 /// The factor options of candidate estimation between two models (Algorithm 1): Augment(), f_pp over
@@ -269,6 +274,17 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 void check_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                      const RegistrationOptions& options, bool may_replace = true, const DenseSearchPair* prepared = nullptr);
 
+/// Checks an `ok` answer against what each sensor saw as empty (beyond the paper): measure_free_space
+/// of the answer, with each scan's range image around its extraction's sensor_origin and the points
+/// higher than `options.ambiguity.free_space_height` above each model's ground. An answer whose two
+/// shares sum to more than `free_space_limit` is `ambiguous` (findings.in_free_space), and is kept.
+/// Where a street's mirror image or a shift along it lands as much of the source as the truth, it
+/// still puts façades where the other sensor saw through. Runs only on an `ok` answer, with a ground
+/// in both models and at least 100 points tested each way (else nothing is found). Adds the
+/// "free_space" timing; verify_registration calls it last.
+void check_free_space(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
+                      const RangeImage& source_image, const RangeImage& target_image, const AmbiguityOptions& options);
+
 /// Verification after selection (register_clouds and the benchmark): crops both clouds to their
 /// extraction's range limits around the sensor (the platform's own hits are not scene), leaves out
 /// their isolated points (without_isolated_points, `options.ambiguity.isolation_cell`; counted in
@@ -279,9 +295,10 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
 /// models have a ground: when the best optimum beats every distinct
 /// optimum's overlap by `decisive_margin` it becomes the answer, `ok`, and check_overlap and
 /// check_half_turn run again on it (a half-turned rival that fits clearly better replaces it,
-/// `ambiguous`); otherwise the quadric answer stands, `ambiguous`. Adds "check_inputs", "overlap",
-/// "dense_preparation", "half_turn", "ground_correlation" and
-/// "dense_search" timings. `source_extraction` and `target_extraction`, when given, are the
+/// `ambiguous`); otherwise the quadric answer stands, `ambiguous`. Last, check_free_space on the
+/// final answer (each cloud's range image is made with the checks' points). Adds "check_inputs",
+/// "overlap", "dense_preparation", "half_turn", "ground_correlation", "dense_search" and
+/// "free_space" timings. `source_extraction` and `target_extraction`, when given, are the
 /// extractions of the two clouds: the points they worked on (ExtractionResult::measured) are
 /// taken as the checks' points when they were chosen by the checks' own range limits and
 /// isolated-point rule (else the clouds are cropped and filtered here).

@@ -35,24 +35,13 @@ void apply_registration_differences(const std::string& preset, RegistrationOptio
     // type and fits all its points (the monument's drum: radius 21.65 m), where the statistical
     // fitter's moments of a partial arc are far off (16.1 m).
     options.modelling.fitter = "constrained";
+    // Its stations are merged into one cloud: no single sensor saw it, so it has no free space of
+    // one sensor to check.
+    options.ambiguity.free_space_limit = -1.0;
   }
-  if (preset == "vlp16") {
-    // In 16-ring scans a street's mirror image can land more of the source than the truth: on the
-    // simulated VLP-16 tuning set (seeds 1001-1005, 300 pairs) the `ok` and wrong answers, all
-    // mirror images, beat their half turn's best rival by at most 0.213, while right `ok` answers
-    // reach 0.56. An `ok` answer must beat it by 0.22 (docs/registration.md, known failures).
-    options.ambiguity.half_turn_ok_margin = 0.22;
-  }
-  if (preset == "avia") {
-    // A forward-looking scanner sees a street's stretch ahead, and a shift along the street that
-    // brings the two views' dense near fields together can land more of the source than the truth.
-    // On the simulated Livox tuning set with both passes driven one way (seeds 1001-1005, 300
-    // pairs), the six `ok` and wrong answers, all such shifts settled by the dense search, beat
-    // their best distinct optimum by at most 0.129, and 59 of the 70 right answers it settled by
-    // more. A settled answer must beat it by 0.13 to be `ok` (docs/registration.md, known failures).
-    options.dense_search.ok_margin = 0.13;
-  }
-  // vlp64, mid360: the paper's registration defaults (its experiments used these sensors).
+  // vlp64, vlp16, mid360, avia: the paper's registration defaults. The sparse and forward-looking
+  // sensors' wrong answers (a street's mirror image, a shift along it) that once needed their own
+  // margins are the free-space check's (AmbiguityOptions::free_space_limit).
 }
 
 // The extraction of `side`.
@@ -180,6 +169,8 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_votes>("ambiguity.half_turn_votes", "ICP also starts from the turned rotation at this many translations the quadrics vote for, starts"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_correlation_starts>("ambiguity.half_turn_correlation_starts", "ICP also starts from the turned rotation at this many translations that land the most source points in occupied target space, starts"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_correlation_reach>("ambiguity.half_turn_correlation_reach", "how far along the ground those translations are searched from the turned answer's, m"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::free_space_limit>("ambiguity.free_space_limit", "an ok answer may put at most this share of each scan's high points in the other sensor's free space, both shares summed, else ambiguous (the answer is kept; negative: no check; clouds in their sensors' frames)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::free_space_height>("ambiguity.free_space_height", "the free-space check tests points standing more than this above their scan's ground, m (>= 0)"),
       // dense_search
       shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),
       shared_key<&R::dense_search, &DenseSearchOptions::voxel_size>("dense_search.voxel_size", "both clouds thinned to one point per cube of this edge, m (> 0)"),
@@ -461,6 +452,8 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
       if (extraction->isolation_neighbours < 1)
         throw Error("extraction.isolation_neighbours must be at least 1, got " + std::to_string(extraction->isolation_neighbours));
     }
+    if (!(options.ambiguity.free_space_height >= 0.0 && std::isfinite(options.ambiguity.free_space_height)))
+      throw Error("ambiguity.free_space_height must be a height >= 0 in metres, got " + std::to_string(options.ambiguity.free_space_height));
     if (!(options.ambiguity.confirm_below >= 0.0 && options.ambiguity.confirm_below <= 1.0))
       throw Error("ambiguity.confirm_below must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.confirm_below));
     if (!(options.ambiguity.confirm_over_identity >= 0.0 && options.ambiguity.confirm_over_identity <= 1.0))

@@ -166,6 +166,15 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                            {"rival", check.has_rival ? matrix_json(check.rival) : nlohmann::json(nullptr)},
                            {"demoted", result.findings.half_turn_rival || result.findings.half_turn_unclear}};
   }
+  if (result.free_space) {
+    const FreeSpaceMeasure& measure = *result.free_space;
+    report["free_space"] = {{"source_in_target_free_space", measure.source_in_target_free_space},
+                            {"target_in_source_free_space", measure.target_in_source_free_space},
+                            {"source_tested", measure.source_tested},
+                            {"target_tested", measure.target_tested},
+                            {"sum", measure.sum()},
+                            {"demoted", result.findings.in_free_space}};
+  }
   if (context.ground_truth) {
     report["ground_truth"] = {{"transform", matrix_json(*context.ground_truth)},
                               {"rte_m", translation_error(result.transform, *context.ground_truth)},

@@ -68,6 +68,8 @@ as an answer when it is ok.
                              "report.json's ground_correlation (poses with share, yaw_deg, transform, best first), or None when it did not run.")
       .def_property_readonly("half_turn", [](const Registration& r) { return report_entry(r, "half_turn"); },
                              "report.json's half_turn, or None when the half-turn check did not run.")
+      .def_property_readonly("free_space", [](const Registration& r) { return report_entry(r, "free_space"); },
+                             "report.json's free_space, or None when the free-space check did not run.")
       .def_property_readonly("ground_truth", [](const Registration& r) { return report_entry(r, "ground_truth"); },
                              "report.json's ground_truth {transform, rte_m, rre_deg, success} when ground_truth= was given, else None.")
       .def_property_readonly("best_candidate", [](const Registration& r) { return r.result.best_candidate; },

@@ -38,6 +38,9 @@ def test_the_result_is_report_json(street_result):
     assert result.counts == report["counts"] and result.counts["correspondences"] > 0
     assert result.candidates == report["candidates"] and sum(c["selected"] for c in result.candidates) == 1
     assert result.overlap == report["overlap"] and result.overlap["transformed"] > result.overlap["identity"]
+    # The right `ok` answer leaves the other sensor's free space nearly empty, each way.
+    assert result.free_space == report["free_space"] and result.free_space["demoted"] is False
+    assert result.free_space["sum"] < 0.2 and min(result.free_space["source_tested"], result.free_space["target_tested"]) >= 100
     assert result.source_model.quadric_count == result.counts["source_quadrics"]
 
 

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -212,6 +213,12 @@ TEST(DecideRegistrationStatus, OkOnlyWhenSureAndFittingAtLeastAsWellAsNotMoving)
   EXPECT_EQ(status_of([](RegistrationFindings& f) {
               f.settled_by_dense_search = true;
               f.half_turn_rival = true;
+            }),
+            RegistrationStatus::Ambiguous);
+  // An answer that puts points where the other sensor saw through is unsure, settled or not.
+  EXPECT_EQ(status_of([](RegistrationFindings& f) {
+              f.settled_by_dense_search = true;
+              f.in_free_space = true;
             }),
             RegistrationStatus::Ambiguous);
   // An estimation failure is the status whatever else was found.
@@ -514,7 +521,7 @@ TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
   check_half_turn(kept, source, target, keep);
   EXPECT_EQ(kept.status, RegistrationStatus::Ok) << kept.message;
   EXPECT_TRUE(kept.transform.isApprox(Eigen::Translation3d(0.3, 0.0, 0.0) * truth));
-  // Asked to beat its rival by more than it does (a sparse sensor's preset asks 0.22), the same
+  // Asked to beat its rival by more than it does (ambiguity.half_turn_ok_margin), the same
   // answer is `ambiguous`, and still the answer; asked a little less, it stays `ok`.
   const double lead = kept.half_turn->answer_overlap - kept.half_turn->rival_overlap;
   ASSERT_GT(lead, keep.ambiguity.half_turn_margin + 0.02) << kept.message;
@@ -573,6 +580,82 @@ TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
   check_half_turn(unchecked, source, target, off);
   EXPECT_EQ(unchecked.status, RegistrationStatus::Ok);
   EXPECT_TRUE(unchecked.transform.isApprox(mirrored));
+}
+
+// Scans that see only what faces them: `observe` keeps every point within 60 m, so these leave out
+// the points a nearer point hides from the sensor (the nearest point per 0.25 x 0.5 deg direction
+// cell, and what lies within 0.3 m behind it).
+PointCloud observe_visible(const std::vector<Eigen::Vector3d>& world, const Eigen::Isometry3d& pose) {
+  const PointCloud all = observe(world, pose);
+  const auto cell_of = [](const Eigen::Vector3d& p) {
+    const double azimuth = std::atan2(p.y(), p.x()) + M_PI, elevation = std::atan2(p.z(), std::hypot(p.x(), p.y())) + M_PI / 2;
+    return static_cast<long>(azimuth * 720.0 / M_PI) * 1000 + static_cast<long>(elevation * 360.0 / M_PI);
+  };
+  std::map<long, double> nearest;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const Eigen::Vector3d p = all.point(i);
+    const auto [slot, inserted] = nearest.emplace(cell_of(p), p.norm());
+    if (!inserted) slot->second = std::min(slot->second, p.norm());
+  }
+  std::vector<Eigen::Index> kept;
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (all.point(i).norm() <= nearest.at(cell_of(all.point(i))) + 0.3) kept.push_back(static_cast<Eigen::Index>(i));
+  PointCloud visible;
+  visible.positions = all.positions(Eigen::all, kept);
+  return visible;
+}
+
+TEST(CheckFreeSpace, TheTruthStaysOkAndItsMirrorImageIsAmbiguous) {
+  const std::vector<Eigen::Vector3d> world = make_street_world(14);
+  const Eigen::Isometry3d source_pose = make_pose(180.0, {12.0, 0.5, 1.73});
+  const Eigen::Isometry3d target_pose = make_pose(3.0, {-15.0, -1.0, 1.73});
+  const PointCloud source = observe_visible(world, source_pose);
+  const PointCloud target = observe_visible(world, target_pose);
+  const Eigen::Isometry3d truth = target_pose.inverse() * source_pose;
+  RegistrationOptions options;
+  options.modelling.augmentation_threshold = 0;
+  const RegistrationResult registered = register_clouds(source, target, options);
+  ASSERT_EQ(registered.status, RegistrationStatus::Ok) << registered.message;
+  ASSERT_TRUE(registration_succeeded(registered.transform, truth)) << registered.message;
+  ASSERT_TRUE(registered.free_space.has_value()) << registered.message;
+  EXPECT_FALSE(registered.findings.in_free_space) << registered.message;
+  EXPECT_LT(registered.free_space->sum(), 0.05) << registered.message;
+  EXPECT_GT(registered.timings_ms.at("free_space"), 0.0);
+
+  const RangeImage source_image(source, Eigen::Vector3d::Zero()), target_image(target, Eigen::Vector3d::Zero());
+  const auto checked = [&](const Eigen::Isometry3d& answer, const AmbiguityOptions& ambiguity) {
+    RegistrationResult result = registered;
+    result.status = RegistrationStatus::Ok;
+    result.findings = RegistrationFindings{};
+    result.free_space.reset();
+    result.message = "candidate of level 0";
+    result.transform = answer;
+    check_free_space(result, source, target, source_image, target_image, ambiguity);
+    return result;
+  };
+  // The street turned half a turn about a point between the scans: façades where the other
+  // sensor saw through, each way; `ambiguous`, and still the answer.
+  const Eigen::Vector3d pivot(target_pose.inverse() * Eigen::Vector3d(-2.0, 0.0, 0.0));
+  Eigen::Isometry3d half_turn = Eigen::Isometry3d::Identity();
+  half_turn.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  half_turn.translation() = pivot - half_turn.linear() * pivot;
+  const RegistrationResult mirrored = checked(half_turn * truth, options.ambiguity);
+  EXPECT_EQ(mirrored.status, RegistrationStatus::Ambiguous) << mirrored.message;
+  EXPECT_TRUE(mirrored.findings.in_free_space);
+  EXPECT_GT(mirrored.free_space->source_in_target_free_space, 0.1) << mirrored.message;
+  EXPECT_GT(mirrored.free_space->target_in_source_free_space, 0.1) << mirrored.message;
+  EXPECT_TRUE(mirrored.transform.isApprox(half_turn * truth));
+  EXPECT_NE(mirrored.message.find("more than the limit"), std::string::npos) << mirrored.message;
+  // Switched off, or with every point below the height asked, nothing is found.
+  AmbiguityOptions off = options.ambiguity;
+  off.free_space_limit = -1.0;
+  EXPECT_EQ(checked(half_turn * truth, off).status, RegistrationStatus::Ok);
+  EXPECT_FALSE(checked(half_turn * truth, off).free_space.has_value());
+  AmbiguityOptions above_everything = options.ambiguity;
+  above_everything.free_space_height = 50.0;
+  const RegistrationResult unjudged = checked(half_turn * truth, above_everything);
+  EXPECT_EQ(unjudged.status, RegistrationStatus::Ok) << unjudged.message;
+  EXPECT_NE(unjudged.message.find("too few points tested"), std::string::npos) << unjudged.message;
 }
 
 TEST(RegisterClouds, OnlyOneSideBelowDeltaAAugmentsBothSides) {

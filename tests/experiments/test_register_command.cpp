@@ -158,13 +158,20 @@ TEST(RegistrationConfig, PresetsKeepTheirValues) {
   EXPECT_DOUBLE_EQ(avia.source_extraction.planes.merge_distance, 0.22);
   EXPECT_DOUBLE_EQ(avia.target_extraction.planes.eigenvalue_ratio, 20.0);
   EXPECT_DOUBLE_EQ(avia.source_extraction.planes.cluster_plane_area, 2.0);
-  EXPECT_DOUBLE_EQ(avia.dense_search.ok_margin, 0.13);
-  EXPECT_DOUBLE_EQ(mid360.dense_search.ok_margin, DenseSearchOptions{}.ok_margin);
+  // The sparse and forward-looking presets keep the default margins: the free-space check catches
+  // the mirror images and shifts along a street they once needed their own margins for.
+  for (const RegistrationOptions* preset : {&avia, &mid360, &vlp16}) {
+    EXPECT_DOUBLE_EQ(preset->dense_search.ok_margin, DenseSearchOptions{}.ok_margin);
+    EXPECT_DOUBLE_EQ(preset->ambiguity.half_turn_ok_margin, AmbiguityOptions{}.half_turn_ok_margin);
+    EXPECT_DOUBLE_EQ(preset->ambiguity.free_space_limit, AmbiguityOptions{}.free_space_limit);
+  }
   const RegistrationOptions monument = registration_preset("monument");
   EXPECT_TRUE(monument.source_extraction.static_scan);
   EXPECT_DOUBLE_EQ(monument.target_extraction.maximum_range, 0.0);
   EXPECT_EQ(monument.modelling.fitter, "constrained");
   EXPECT_EQ(monument.source_extraction.shapes.minimum_points, 60);
+  EXPECT_LT(monument.ambiguity.free_space_limit, 0.0) << "merged stations have no single sensor's free space";
+  EXPECT_DOUBLE_EQ(vlp64.ambiguity.free_space_limit, AmbiguityOptions{}.free_space_limit);
   // Every preset's printed configuration, applied over another preset, gives that preset back.
   const std::filesystem::path folder = temporary_folder("presets");
   for (const std::string& name : registration_preset_names()) {
@@ -227,6 +234,8 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("negative_isolation.yaml", "extraction:\n  isolation_cell: -0.3\n", "extraction.isolation_cell must be a length >= 0");
   expect_error_naming("no_neighbours.yaml", "extraction:\n  isolation_neighbours: 0\n", "extraction.isolation_neighbours must be at least 1");
   expect_error_naming("no_check_neighbours.yaml", "ambiguity:\n  isolation_neighbours: 0\n", "ambiguity.isolation_neighbours must be at least 1");
+  expect_error_naming("low_free_space.yaml", "ambiguity:\n  free_space_height: -1\n", "ambiguity.free_space_height must be a height >= 0");
+  expect_error_naming("nan_free_space.yaml", "ambiguity:\n  free_space_limit: .nan\n", "key 'ambiguity.free_space_limit' must be a finite number");
   expect_error_naming("gain_above_one.yaml", "ambiguity:\n  confirm_over_identity: 1.5\n", "ambiguity.confirm_over_identity must be a fraction in [0, 1]");
   RegistrationOptions ignored;
   EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
