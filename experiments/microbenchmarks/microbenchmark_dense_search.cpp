@@ -3,7 +3,8 @@
 // point-to-plane ICP from the identity, and the whole search along the weakest direction (17 shifts
 // plus the identity); and the correlation over yaw and ground translation on KITTI-00 frames
 // 52 -> 88 (29.9 m apart); and leaving out the isolated points of KITTI frame 52 (as the extraction
-// and every check do), as scanned and with 30% uniform outliers. Skips with a message when ../shared/data is absent.
+// and every check do), as scanned and with 30% uniform outliers; and the free-space check's range
+// image and measure on frame 52. Skips with a message when ../shared/data is absent.
 #include "estimation/dense_search.h"
 #include "estimation/ground_correlation.h"
 #include "estimation/registration.h"
@@ -142,6 +143,32 @@ void BM_WithoutIsolatedPointsKitti52(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(quadrix::without_isolated_points(cloud, 0.3).size());
 }
 BENCHMARK(BM_WithoutIsolatedPointsKitti52)->Arg(0)->Arg(30)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The free-space check's range image of KITTI-00 frame 52 (121k points) around its sensor, and the
+// check of the identity between frames 52 and 53 against two such images (state.range(0): 0 the
+// image, 1 the measure; points higher than 2 m above a level ground at -1.73 m).
+void BM_FreeSpaceKitti52(benchmark::State& state) {
+  const std::string path = data_path("kitti00/velodyne/000052.bin");
+  if (!std::filesystem::exists(path)) {
+    state.SkipWithError(("real data absent: " + path).c_str());
+    return;
+  }
+  const quadrix::PointCloud cloud = quadrix::read_point_cloud(path);
+  const quadrix::RangeImage image(cloud, Eigen::Vector3d::Zero());
+  const Eigen::Vector4d ground(0.0, 0.0, 1.0, 1.73);
+  for (auto _ : state) {
+    if (state.range(0) == 0) {
+      const quadrix::RangeImage built(cloud, Eigen::Vector3d::Zero());
+      benchmark::DoNotOptimize(built.nearest_return(Eigen::Vector3d(10.0, 0.0, 0.0)));
+    } else {
+      benchmark::DoNotOptimize(
+          quadrix::measure_free_space(cloud, cloud, image, image, Eigen::Isometry3d::Identity(), ground, ground, 2.0).sum());
+    }
+  }
+  state.SetLabel(state.range(0) == 0 ? "range image" : "measure both ways");
+  state.counters["points"] = static_cast<double>(cloud.size());
+}
+BENCHMARK(BM_FreeSpaceKitti52)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

@@ -45,6 +45,18 @@ TEST(RangeImage, HoldsTheNearestReturnOfEachDirectionAroundItsSensor) {
   EXPECT_FALSE(image.nearest_return({0.0, -5.0, 0.0}).has_value()) << "no return in that direction";
   EXPECT_FALSE(image.nearest_return({5.0, 0.0, 1.0}).has_value()) << "11 deg up is another elevation cell";
   EXPECT_FALSE(image.nearest_return(Eigen::Vector3d::Zero()).has_value()) << "the sensor itself has no direction";
+  // Elevation cells are centred on whole degrees: a ring at 1 deg (a VLP-16's) holds the middle of
+  // the cell from 0.5 to 1.5 deg, whatever the last bits of its angle.
+  const auto at_elevation = [](double degrees, double range) -> Eigen::Vector3d {
+    const double elevation = degrees * M_PI / 180.0, azimuth = 10.0 * M_PI / 180.0;
+    return Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation)) * range;
+  };
+  const RangeImage ring(cloud_of({at_elevation(1.0, 20.0), at_elevation(1.0 + 1e-9, 21.0), at_elevation(1.0 - 1e-9, 22.0)}),
+                        Eigen::Vector3d::Zero());
+  EXPECT_NEAR(*ring.nearest_return(at_elevation(1.4, 5.0)), 20.0, 1e-4) << "the ring's returns share a cell";
+  EXPECT_NEAR(*ring.nearest_return(at_elevation(0.6, 5.0)), 20.0, 1e-4);
+  EXPECT_FALSE(ring.nearest_return(at_elevation(0.4, 5.0)).has_value());
+  EXPECT_FALSE(ring.nearest_return(at_elevation(1.6, 5.0)).has_value());
   // Around another sensor position, directions and ranges are taken from there.
   const RangeImage moved(wall, Eigen::Vector3d(1.0, 0.0, 0.0));
   EXPECT_NEAR(*moved.nearest_return({6.0, 0.0, 0.0}), 9.0, 1e-5);
