@@ -487,16 +487,42 @@ TEST(RegisterModelledClouds, ChecksPreparedDuringTheMatchingGiveTheSequentialAns
   }
 }
 
-TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
+// Two scans of one street 27 m apart, facing opposite ways (the half-turn and free-space tests),
+// each taken with `observe_with`, and registered with quadrics only (as in the street test above).
+struct OppositeScans {
+  PointCloud source, target;
+  Eigen::Isometry3d truth;   // source into target
+  Eigen::Isometry3d mirror;  // the truth turned half a turn about the up axis through a point between the sensors
+  RegistrationOptions options;
+  RegistrationResult registered;
+};
+
+template <typename Observe>
+OppositeScans opposite_scans(const Observe& observe_with) {
   const std::vector<Eigen::Vector3d> world = make_street_world(14);
   const Eigen::Isometry3d source_pose = make_pose(180.0, {12.0, 0.5, 1.73});
   const Eigen::Isometry3d target_pose = make_pose(3.0, {-15.0, -1.0, 1.73});
-  const PointCloud source = observe(world, source_pose);
-  const PointCloud target = observe(world, target_pose);
-  const Eigen::Isometry3d truth = target_pose.inverse() * source_pose;
-  RegistrationOptions options;
-  options.modelling.augmentation_threshold = 0;  // quadrics only, as in the street test above
-  const RegistrationResult registered = register_clouds(source, target, options);
+  OppositeScans scans;
+  scans.source = observe_with(world, source_pose);
+  scans.target = observe_with(world, target_pose);
+  scans.truth = target_pose.inverse() * source_pose;
+  const Eigen::Vector3d pivot(target_pose.inverse() * Eigen::Vector3d(-2.0, 0.0, 0.0));
+  Eigen::Isometry3d half_turn = Eigen::Isometry3d::Identity();
+  half_turn.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  half_turn.translation() = pivot - half_turn.linear() * pivot;
+  scans.mirror = half_turn * scans.truth;
+  scans.options.modelling.augmentation_threshold = 0;
+  scans.registered = register_clouds(scans.source, scans.target, scans.options);
+  return scans;
+}
+
+TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
+  const OppositeScans scans = opposite_scans(observe);
+  const PointCloud& source = scans.source;
+  const PointCloud& target = scans.target;
+  const Eigen::Isometry3d& truth = scans.truth;
+  const RegistrationOptions& options = scans.options;
+  const RegistrationResult& registered = scans.registered;
   ASSERT_TRUE(registered.half_turn.has_value()) << registered.message;
 
   // The truth, 0.3 m and 2 degrees off, as a confident answer: it stays `ok`, beats its rival by
@@ -543,11 +569,7 @@ TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
   }
 
   // The truth turned half a turn about the up axis through a point between the two scans.
-  const Eigen::Vector3d pivot(target_pose.inverse() * Eigen::Vector3d(-2.0, 0.0, 0.0));
-  Eigen::Isometry3d half_turn = Eigen::Isometry3d::Identity();
-  half_turn.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  half_turn.translation() = pivot - half_turn.linear() * pivot;
-  const Eigen::Isometry3d mirrored = half_turn * truth;
+  const Eigen::Isometry3d& mirrored = scans.mirror;
   ASSERT_FALSE(registration_succeeded(mirrored, truth));
   RegistrationResult flipped = registered;
   flipped.status = RegistrationStatus::Ok;
@@ -606,23 +628,16 @@ PointCloud observe_visible(const std::vector<Eigen::Vector3d>& world, const Eige
 }
 
 TEST(CheckFreeSpace, TheTruthStaysOkAndItsMirrorImageIsAmbiguous) {
-  const std::vector<Eigen::Vector3d> world = make_street_world(14);
-  const Eigen::Isometry3d source_pose = make_pose(180.0, {12.0, 0.5, 1.73});
-  const Eigen::Isometry3d target_pose = make_pose(3.0, {-15.0, -1.0, 1.73});
-  const PointCloud source = observe_visible(world, source_pose);
-  const PointCloud target = observe_visible(world, target_pose);
-  const Eigen::Isometry3d truth = target_pose.inverse() * source_pose;
-  RegistrationOptions options;
-  options.modelling.augmentation_threshold = 0;
-  const RegistrationResult registered = register_clouds(source, target, options);
+  const OppositeScans scans = opposite_scans(observe_visible);
+  const RegistrationResult& registered = scans.registered;
   ASSERT_EQ(registered.status, RegistrationStatus::Ok) << registered.message;
-  ASSERT_TRUE(registration_succeeded(registered.transform, truth)) << registered.message;
+  ASSERT_TRUE(registration_succeeded(registered.transform, scans.truth)) << registered.message;
   ASSERT_TRUE(registered.free_space.has_value()) << registered.message;
   EXPECT_FALSE(registered.findings.in_free_space) << registered.message;
   EXPECT_LT(registered.free_space->sum(), 0.05) << registered.message;
   EXPECT_GT(registered.timings_ms.at("free_space"), 0.0);
 
-  const RangeImage source_image(source, Eigen::Vector3d::Zero()), target_image(target, Eigen::Vector3d::Zero());
+  const RangeImage source_image(scans.source, Eigen::Vector3d::Zero()), target_image(scans.target, Eigen::Vector3d::Zero());
   const auto checked = [&](const Eigen::Isometry3d& answer, const AmbiguityOptions& ambiguity) {
     RegistrationResult result = registered;
     result.status = RegistrationStatus::Ok;
@@ -630,30 +645,26 @@ TEST(CheckFreeSpace, TheTruthStaysOkAndItsMirrorImageIsAmbiguous) {
     result.free_space.reset();
     result.message = "candidate of level 0";
     result.transform = answer;
-    check_free_space(result, source, target, source_image, target_image, ambiguity);
+    check_free_space(result, scans.source, scans.target, source_image, target_image, ambiguity);
     return result;
   };
   // The street turned half a turn about a point between the scans: façades where the other
   // sensor saw through, each way; `ambiguous`, and still the answer.
-  const Eigen::Vector3d pivot(target_pose.inverse() * Eigen::Vector3d(-2.0, 0.0, 0.0));
-  Eigen::Isometry3d half_turn = Eigen::Isometry3d::Identity();
-  half_turn.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  half_turn.translation() = pivot - half_turn.linear() * pivot;
-  const RegistrationResult mirrored = checked(half_turn * truth, options.ambiguity);
+  const RegistrationResult mirrored = checked(scans.mirror, scans.options.ambiguity);
   EXPECT_EQ(mirrored.status, RegistrationStatus::Ambiguous) << mirrored.message;
   EXPECT_TRUE(mirrored.findings.in_free_space);
   EXPECT_GT(mirrored.free_space->source_in_target_free_space, 0.1) << mirrored.message;
   EXPECT_GT(mirrored.free_space->target_in_source_free_space, 0.1) << mirrored.message;
-  EXPECT_TRUE(mirrored.transform.isApprox(half_turn * truth));
+  EXPECT_TRUE(mirrored.transform.isApprox(scans.mirror));
   EXPECT_NE(mirrored.message.find("more than the limit"), std::string::npos) << mirrored.message;
   // Switched off, or with every point below the height asked, nothing is found.
-  AmbiguityOptions off = options.ambiguity;
+  AmbiguityOptions off = scans.options.ambiguity;
   off.free_space_limit = -1.0;
-  EXPECT_EQ(checked(half_turn * truth, off).status, RegistrationStatus::Ok);
-  EXPECT_FALSE(checked(half_turn * truth, off).free_space.has_value());
-  AmbiguityOptions above_everything = options.ambiguity;
+  EXPECT_EQ(checked(scans.mirror, off).status, RegistrationStatus::Ok);
+  EXPECT_FALSE(checked(scans.mirror, off).free_space.has_value());
+  AmbiguityOptions above_everything = scans.options.ambiguity;
   above_everything.free_space_height = 50.0;
-  const RegistrationResult unjudged = checked(half_turn * truth, above_everything);
+  const RegistrationResult unjudged = checked(scans.mirror, above_everything);
   EXPECT_EQ(unjudged.status, RegistrationStatus::Ok) << unjudged.message;
   EXPECT_NE(unjudged.message.find("too few points tested"), std::string::npos) << unjudged.message;
 }
