@@ -93,7 +93,7 @@ RegistrationStatus decide_registration_status(const RegistrationFindings& findin
   const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
   const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little && !findings.half_turn_rival &&
                     !findings.half_turn_unclear && !findings.dense_search_unclear &&
-                    !findings.overlap_unconfirmed && !findings.in_free_space;
+                    !findings.overlap_unconfirmed && !findings.in_free_space && !findings.free_space_unjudged;
   return sure && fits ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
 }
 
@@ -724,8 +724,15 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
 
 void check_free_space(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                       const RangeImage& source_image, const RangeImage& target_image, const AmbiguityOptions& options) {
+  if (result.status != RegistrationStatus::Ok || options.free_space_limit < 0.0) return;
   const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
-  if (result.status != RegistrationStatus::Ok || options.free_space_limit < 0.0 || !source_ground || !target_ground) return;
+  if (!source_ground || !target_ground) {
+    result.findings.free_space_unjudged = true;
+    result.message += std::string("; free space: no ground in the ") + (source_ground ? "target" : "source") +
+                      " model to measure heights from: not checked, not sure";
+    decide(result);
+    return;
+  }
   // Fewer tested points than this on either side judge nothing: a share of a few dozen points
   // moves by tenths with a single car.
   constexpr std::size_t kMinimumTested = 100;
@@ -739,7 +746,8 @@ void check_free_space(RegistrationResult& result, const PointCloud& source, cons
         << " source points in the target sensor's, " << measure.target_in_source_free_space << " of "
         << measure.target_tested << " target points in the source sensor's";
     if (measure.source_tested < kMinimumTested || measure.target_tested < kMinimumTested) {
-      why << ": too few points tested (fewer than " << kMinimumTested << " a side) to judge";
+      why << ": too few points tested (fewer than " << kMinimumTested << " a side) to judge, not sure";
+      result.findings.free_space_unjudged = true;
     } else {
       why << " (sum " << measure.sum() << ", limit " << options.free_space_limit << ")";
       result.findings.in_free_space = measure.sum() > options.free_space_limit;

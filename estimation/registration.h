@@ -149,6 +149,7 @@ struct RegistrationFindings {
   bool half_turn_unclear = false;         ///< the answer beats that rival by less than AmbiguityOptions::half_turn_ok_margin
   bool replaced_by_half_turn = false;     ///< the half-turned rival fitted clearly better and became the answer (check_half_turn)
   bool in_free_space = false;             ///< the answer puts more points in the other sensor's free space than AmbiguityOptions::free_space_limit (check_free_space)
+  bool free_space_unjudged = false;       ///< the free-space check could not judge the answer (no ground in a model, or fewer than 100 points tested a side), so it is not vouched for (check_free_space)
 };
 
 /// The half-turn check of an answer (check_half_turn): how well the answer and its mirror image fit.
@@ -279,9 +280,10 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
 /// higher than `options.ambiguity.free_space_height` above each model's ground. An answer whose two
 /// shares sum to more than `free_space_limit` is `ambiguous` (findings.in_free_space), and is kept.
 /// Where a street's mirror image or a shift along it lands as much of the source as the truth, it
-/// still puts façades where the other sensor saw through. Runs only on an `ok` answer, with a ground
-/// in both models and at least 100 points tested each way (else nothing is found). Adds the
-/// "free_space" timing; verify_registration calls it last.
+/// still puts façades where the other sensor saw through. Runs only on an `ok` answer. Without a
+/// ground in both models, or with fewer than 100 points tested a side, it cannot judge, and the
+/// answer is `ambiguous` too (findings.free_space_unjudged): `ok` is what every check vouched for.
+/// Adds the "free_space" timing; verify_registration calls it last.
 void check_free_space(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                       const RangeImage& source_image, const RangeImage& target_image, const AmbiguityOptions& options);
 

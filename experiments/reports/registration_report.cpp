@@ -173,7 +173,7 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                             {"source_tested", measure.source_tested},
                             {"target_tested", measure.target_tested},
                             {"sum", measure.sum()},
-                            {"demoted", result.findings.in_free_space}};
+                            {"demoted", result.findings.in_free_space || result.findings.free_space_unjudged}};
   }
   if (context.ground_truth) {
     report["ground_truth"] = {{"transform", matrix_json(*context.ground_truth)},

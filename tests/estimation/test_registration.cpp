@@ -221,6 +221,7 @@ TEST(DecideRegistrationStatus, OkOnlyWhenSureAndFittingAtLeastAsWellAsNotMoving)
               f.in_free_space = true;
             }),
             RegistrationStatus::Ambiguous);
+  EXPECT_EQ(status_of([](RegistrationFindings& f) { f.free_space_unjudged = true; }), RegistrationStatus::Ambiguous);
   // An estimation failure is the status whatever else was found.
   for (const RegistrationStatus failure : {RegistrationStatus::Degenerate, RegistrationStatus::Failed})
     EXPECT_EQ(status_of([&](RegistrationFindings& f) {
@@ -657,16 +658,20 @@ TEST(CheckFreeSpace, TheTruthStaysOkAndItsMirrorImageIsAmbiguous) {
   EXPECT_GT(mirrored.free_space->target_in_source_free_space, 0.1) << mirrored.message;
   EXPECT_TRUE(mirrored.transform.isApprox(scans.mirror));
   EXPECT_NE(mirrored.message.find("more than the limit"), std::string::npos) << mirrored.message;
-  // Switched off, or with every point below the height asked, nothing is found.
+  // Switched off, nothing is found.
   AmbiguityOptions off = scans.options.ambiguity;
   off.free_space_limit = -1.0;
   EXPECT_EQ(checked(scans.mirror, off).status, RegistrationStatus::Ok);
   EXPECT_FALSE(checked(scans.mirror, off).free_space.has_value());
   AmbiguityOptions above_everything = scans.options.ambiguity;
   above_everything.free_space_height = 50.0;
+  // An answer the check cannot judge is not vouched for: `ambiguous`, and still the answer.
   const RegistrationResult unjudged = checked(scans.mirror, above_everything);
-  EXPECT_EQ(unjudged.status, RegistrationStatus::Ok) << unjudged.message;
+  EXPECT_EQ(unjudged.status, RegistrationStatus::Ambiguous) << unjudged.message;
+  EXPECT_TRUE(unjudged.findings.free_space_unjudged);
+  EXPECT_FALSE(unjudged.findings.in_free_space);
   EXPECT_NE(unjudged.message.find("too few points tested"), std::string::npos) << unjudged.message;
+  EXPECT_TRUE(unjudged.transform.isApprox(scans.mirror));
 }
 
 TEST(RegisterClouds, OnlyOneSideBelowDeltaAAugmentsBothSides) {
