@@ -310,12 +310,15 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   check_overlap(wrong, source, target, guards);
   EXPECT_EQ(wrong.status, RegistrationStatus::Degenerate);
   // verify_registration: the guard demotes a wrong `ok` 6 m off, and the dense search then settles
-  // it (the truth lies inside its grid: 7 m along the weakest direction, 5 m across).
+  // it (the truth lies inside its grid: 7 m along the weakest direction, 5 m across). Only the
+  // source model has a ground here, so the free-space check could not judge: it is switched off.
+  RegistrationOptions verification;
+  verification.ambiguity.free_space_limit = -1.0;
   RegistrationResult verified = right;
   verified.status = RegistrationStatus::Ok;
   verified.message = "candidate of level 0";
   verified.transform = Eigen::Translation3d(6.0, 0.0, 0.0) * truth;
-  verify_registration(verified, source, target, RegistrationOptions{});
+  verify_registration(verified, source, target, verification);
   EXPECT_NE(verified.message.find("left where it is"), std::string::npos) << verified.message;
   EXPECT_NE(verified.message.find(": settled"), std::string::npos) << verified.message;
   EXPECT_EQ(verified.status, RegistrationStatus::Ok) << verified.message;
@@ -323,7 +326,7 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   EXPECT_GE(verified.overlap->transformed, verified.overlap->identity);
   // 8 m off, the best optimum (the truth) lies outside the grid: not settled, the answer stands
   // (the half-turn check, which also starts from not moving, switched off).
-  RegistrationOptions grid_only;
+  RegistrationOptions grid_only = verification;
   grid_only.ambiguity.half_turn_margin = -1.0;
   RegistrationResult beyond = verified;
   beyond.status = RegistrationStatus::Ok;
@@ -340,7 +343,7 @@ TEST(CheckOverlap, AnOkAnswerThatFitsWorseThanNotMovingIsAmbiguous) {
   beyond.message = "candidate of level 0";
   beyond.transform = Eigen::Translation3d(8.0, 0.0, 0.0) * truth;
   beyond.dense_search.reset();
-  verify_registration(beyond, source, target, RegistrationOptions{});
+  verify_registration(beyond, source, target, verification);
   EXPECT_TRUE(beyond.findings.replaced_by_half_turn) << beyond.message;
   EXPECT_EQ(beyond.status, RegistrationStatus::Ok) << beyond.message;
   EXPECT_LT(translation_error(beyond.transform, truth), 0.1) << beyond.message;
