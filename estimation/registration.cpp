@@ -777,10 +777,11 @@ bool may_search(const RegistrationOptions& options) {
 }
 
 // The checks' points (the extractions' own when chosen by the same rule), the target's hash and,
-// when `prepare_search`, the pair every ICP search shares (DenseSearchPair).
+// when `may_answer` (an `ok` or `ambiguous` answer is possible), the pair every ICP search shares
+// (DenseSearchPair, when one may run) and the range images of the free-space check (when it is on).
 CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, const RegistrationOptions& options,
                            const ExtractionResult* source_extraction, const ExtractionResult* target_extraction,
-                           bool prepare_search) {
+                           bool may_answer) {
   // Every check measures the clouds within the extraction's range, without their isolated points:
   // a spurious return never lands on the other scan, so each one would count against the right
   // answer (docs/registration.md, "Isolated points").
@@ -816,7 +817,8 @@ CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, c
     return cropped;
   };
   CheckInputs inputs;
-  const bool free_space = options.ambiguity.free_space_limit >= 0.0;
+  const bool prepare_search = may_answer && may_search(options);
+  const bool free_space = may_answer && options.ambiguity.free_space_limit >= 0.0;
   const Clock::time_point start = Clock::now();
   // The target is hashed once, for every overlap measured after. When the isolation cube is the
   // overlap's own distance (the default), that hash's cells also tell the isolated target points.
@@ -908,10 +910,10 @@ void verify_prepared(RegistrationResult& result, const CheckInputs& inputs, cons
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                          const RegistrationOptions& options, const ExtractionResult* source_extraction,
                          const ExtractionResult* target_extraction) {
-  // The answer is known here: the searches' preparation is paid only when one may run on it.
-  const bool prepare_search =
-      (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous) && may_search(options);
-  verify_prepared(result, prepare_checks(source, target, options, source_extraction, target_extraction, prepare_search),
+  // The answer is known here: the searches' and the free-space check's preparation is paid only
+  // when there is an answer to check.
+  const bool may_answer = result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous;
+  verify_prepared(result, prepare_checks(source, target, options, source_extraction, target_extraction, may_answer),
                   options);
 }
 
@@ -963,7 +965,7 @@ RegistrationResult register_modelled_clouds(const ModelledCloud& source, const M
       },
       [&] {
         inputs = prepare_checks(*source.cloud, *target.cloud, options, &source_modelling->extraction,
-                                &target_modelling->extraction, may_search(options));
+                                &target_modelling->extraction, true);
       });
   verify_prepared(result, *inputs, options);
   result.timings_ms["modelling_source"] = source_ms;
