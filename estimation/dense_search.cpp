@@ -435,6 +435,20 @@ DenseOptimum align_point_to_plane(const PointCloud& source, const PointCloud& ta
   return optimum;
 }
 
+DenseOptimum refine_answer(const DenseSearchPair& prepared, const Eigen::Isometry3d& answer,
+                           const std::optional<Eigen::Vector4d>& source_ground, const DenseSearchOptions& options) {
+  validate_dense_search_options(options);
+  const PreparedPair pair = sample(prepared, options);
+  // The two passes of search_weakest_direction for its answer's start (run_coarse_pass, then
+  // refine_contenders), so the answer comes out as a search that refines it would give it.
+  DenseOptimum optimum = run_icp(pair, pair.coarse, answer, (options.iterations + 1) / 2, options);
+  optimum = run_icp(pair, pair.source, optimum.transform, options.iterations, options);
+  optimum.start = "answer";
+  optimum.refined = true;
+  optimum.overlap = covered_fraction(pair, pair.source, optimum.transform, source_ground);
+  return optimum;
+}
+
 DenseSearchResult search_weakest_direction(const PointCloud& source, const PointCloud& target, const Eigen::Isometry3d& answer,
                                            const std::vector<Eigen::Isometry3d>& other_starts,
                                            const std::vector<Eigen::Isometry3d>& global_starts,

@@ -108,6 +108,14 @@ class DenseSearchPair {
   std::shared_ptr<const Prepared> prepared_;
 };
 
+/// Refines `answer` by point-to-plane ICP on `pair` as search_weakest_direction refines its answer's
+/// start: half of `options.iterations` on a third of the `options.source_samples`, then all of them
+/// on all; the optimum's overlap is measured on those samples (points near `source_ground` skipped).
+/// `options.voxel_size` and `options.normal_neighbours` must be those `pair` was prepared with
+/// (else quadrix::Error).
+DenseOptimum refine_answer(const DenseSearchPair& pair, const Eigen::Isometry3d& answer,
+                           const std::optional<Eigen::Vector4d>& source_ground, const DenseSearchOptions& options = {});
+
 /// Runs ICP from `answer` shifted by k·step (|k·step| ≤ range) along the weakest translation
 /// direction of the target's normals at `answer` (orthogonal to `up` when given: motions along the
 /// ground) and by j·across_step (|j·across_step| ≤ across_range) across it, from each of

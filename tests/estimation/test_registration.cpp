@@ -470,7 +470,7 @@ TEST(RegisterModelledClouds, ChecksPreparedDuringTheMatchingGiveTheSequentialAns
   const ModellingResult target_modelling = model_scene(target, options.target_extraction, options.modelling);
   RegistrationResult sequential = register_models(source_modelling.model, target_modelling.model, options);
   verify_registration(sequential, source, target, options, &source_modelling.extraction, &target_modelling.extraction);
-  ASSERT_TRUE(sequential.half_turn.has_value()) << "the half-turn check's ICP must run: " << sequential.message;
+  ASSERT_EQ(sequential.timings_ms.count("answer_refinement"), 1u) << "the answer's ICP refinement must run: " << sequential.message;
   const auto pipeline = [&] {
     return register_modelled_clouds({&source, &source_modelling, 0.0, false}, {&target, &target_modelling, 0.0, false}, options);
   };
@@ -485,8 +485,7 @@ TEST(RegisterModelledClouds, ChecksPreparedDuringTheMatchingGiveTheSequentialAns
     EXPECT_EQ(result->message, sequential.message);
     EXPECT_EQ(result->counts.source_isolated_points, sequential.counts.source_isolated_points);
     EXPECT_EQ(result->counts.target_isolated_points, sequential.counts.target_isolated_points);
-    ASSERT_TRUE(result->half_turn.has_value());
-    EXPECT_EQ(result->half_turn->answer_overlap, sequential.half_turn->answer_overlap);
+    EXPECT_EQ(result->timings_ms.count("answer_refinement"), 1u);
     EXPECT_EQ(result->timings_ms.count("dense_preparation"), 1u);
   }
 }
@@ -526,8 +525,7 @@ TEST(CheckHalfTurn, TheTruthBeatsItsMirrorImageAndTheMirrorImageIsReplaced) {
   const PointCloud& target = scans.target;
   const Eigen::Isometry3d& truth = scans.truth;
   const RegistrationOptions& options = scans.options;
-  const RegistrationResult& registered = scans.registered;
-  ASSERT_TRUE(registered.half_turn.has_value()) << registered.message;
+  const RegistrationResult& registered = scans.registered;  // its models serve the answers below
 
   // The truth, 0.3 m and 2 degrees off, as a confident answer: it stays `ok`, beats its rival by
   // more than the margin, and becomes its ICP optimum, much nearer the truth.
@@ -675,6 +673,71 @@ TEST(CheckFreeSpace, TheTruthStaysOkAndItsMirrorImageIsAmbiguous) {
   EXPECT_FALSE(unjudged.findings.in_free_space);
   EXPECT_NE(unjudged.message.find("too few points tested"), std::string::npos) << unjudged.message;
   EXPECT_TRUE(unjudged.transform.isApprox(scans.mirror));
+}
+
+// The free-space check goes before the half-turn check: an `ok` answer it clears is refined by ICP
+// and stays `ok` without the half-turn check; one it does not clear goes, `ambiguous`, to the
+// half-turn check and the dense search, and their new answer is judged again.
+TEST(VerifyRegistration, TheFreeSpaceCheckClearsAnOkAnswerBeforeTheHalfTurnCheck) {
+  const OppositeScans scans = opposite_scans(observe_visible);
+  const RegistrationResult& registered = scans.registered;
+  ASSERT_EQ(registered.status, RegistrationStatus::Ok) << registered.message;
+  EXPECT_TRUE(registration_succeeded(registered.transform, scans.truth)) << registered.message;
+  EXPECT_FALSE(registered.half_turn.has_value()) << registered.message;
+  EXPECT_EQ(registered.timings_ms.count("half_turn"), 0u);
+  EXPECT_GT(registered.timings_ms.at("answer_refinement"), 0.0);
+  EXPECT_NE(registered.message.find("no half-turn check needed"), std::string::npos) << registered.message;
+
+  // The mirror image as a confident answer: the overlap guard demotes it, the half-turn check
+  // replaces it by its rival, the dense search settles that, and the free-space check, run on the
+  // new answer, clears it: `ok` and right.
+  RegistrationResult flipped = registered;
+  flipped.status = RegistrationStatus::Ok;
+  flipped.findings = RegistrationFindings{};
+  flipped.message = "candidate of level 0";
+  flipped.transform = scans.mirror;
+  flipped.half_turn.reset();
+  flipped.free_space.reset();
+  flipped.timings_ms.clear();
+  verify_registration(flipped, scans.source, scans.target, scans.options);
+  ASSERT_TRUE(flipped.half_turn.has_value()) << flipped.message;
+  EXPECT_TRUE(flipped.findings.replaced_by_half_turn) << flipped.message;
+  EXPECT_TRUE(flipped.findings.settled_by_dense_search) << flipped.message;
+  EXPECT_EQ(flipped.status, RegistrationStatus::Ok) << flipped.message;
+  EXPECT_TRUE(registration_succeeded(flipped.transform, scans.truth)) << flipped.message;
+  ASSERT_TRUE(flipped.free_space.has_value());
+  EXPECT_FALSE(flipped.findings.in_free_space) << flipped.message;
+  EXPECT_LT(flipped.free_space->sum(), scans.options.ambiguity.free_space_limit) << flipped.message;
+
+  // An answer the free-space check does not clear (here a limit no answer meets) goes to the
+  // half-turn check and the dense search, and stays `ambiguous`: it is still the answer.
+  RegistrationOptions strict = scans.options;
+  strict.ambiguity.free_space_limit = 0.0;
+  RegistrationResult doubted = registered;
+  doubted.status = RegistrationStatus::Ok;
+  doubted.findings = RegistrationFindings{};
+  doubted.message = "candidate of level 0";
+  doubted.half_turn.reset();
+  doubted.free_space.reset();
+  doubted.timings_ms.clear();
+  verify_registration(doubted, scans.source, scans.target, strict);
+  EXPECT_NE(doubted.message.find("more than the limit"), std::string::npos) << doubted.message;
+  EXPECT_TRUE(doubted.half_turn.has_value()) << doubted.message;
+  EXPECT_GT(doubted.timings_ms.at("half_turn"), 0.0);
+  EXPECT_EQ(doubted.status, RegistrationStatus::Ambiguous) << doubted.message;
+  EXPECT_TRUE(doubted.findings.in_free_space) << doubted.message;
+  EXPECT_TRUE(registration_succeeded(doubted.transform, scans.truth)) << doubted.message;
+
+  // With the free-space check off, the half-turn check runs on the `ok` answer, and the answer is
+  // the same ICP optimum.
+  RegistrationOptions without_free_space = scans.options;
+  without_free_space.ambiguity.free_space_limit = -1.0;
+  const RegistrationResult checked_by_half_turn = register_clouds(scans.source, scans.target, without_free_space);
+  ASSERT_EQ(checked_by_half_turn.status, RegistrationStatus::Ok) << checked_by_half_turn.message;
+  ASSERT_TRUE(checked_by_half_turn.half_turn.has_value()) << checked_by_half_turn.message;
+  EXPECT_EQ(checked_by_half_turn.timings_ms.count("answer_refinement"), 0u);
+  EXPECT_LT(translation_error(checked_by_half_turn.transform, registered.transform), 0.01);
+  EXPECT_LT(rotation_error_degrees(checked_by_half_turn.transform, registered.transform), 0.05);
 }
 
 TEST(RegisterClouds, OnlyOneSideBelowDeltaAAugmentsBothSides) {
