@@ -372,13 +372,20 @@ void refine_contenders(const PreparedPair& pair, const std::vector<std::size_t>&
   });
 }
 
-// Picks the highest overlap, its best rival that disagrees with it, and the margin between the two.
+// Picks the highest overlap, its best rival that disagrees with it, and the margin between the two,
+// among the optima not screened out (among all when every refined one is).
 void pick_best_and_rival(DenseSearchResult& result, double translation_disagreement,
                          double rotation_disagreement_degrees) {
-  for (std::size_t i = 1; i < result.optima.size(); ++i)
-    if (result.optima[i].overlap > result.optima[result.best].overlap) result.best = i;
+  const bool any_kept = std::any_of(result.optima.begin(), result.optima.end(),
+                                    [](const DenseOptimum& optimum) { return optimum.refined && !optimum.screened_out; });
+  const auto eligible = [&](std::size_t i) { return !any_kept || !result.optima[i].screened_out; };
+  std::optional<std::size_t> best_index;
+  for (std::size_t i = 0; i < result.optima.size(); ++i)
+    if (eligible(i) && (!best_index || result.optima[i].overlap > result.optima[*best_index].overlap)) best_index = i;
+  result.best = *best_index;
   const Eigen::Isometry3d& best = result.optima[result.best].transform;
   for (std::size_t i = 0; i < result.optima.size(); ++i) {
+    if (!eligible(i)) continue;
     const bool disagrees = translation_error(result.optima[i].transform, best) > translation_disagreement ||
                            rotation_error_degrees(result.optima[i].transform, best) > rotation_disagreement_degrees;
     if (disagrees && (!result.rival || result.optima[i].overlap > result.optima[*result.rival].overlap)) result.rival = i;
@@ -466,7 +473,7 @@ DenseSearchResult search_weakest_direction(const DenseSearchPair& prepared, cons
                                            const std::optional<Eigen::Vector3d>& up,
                                            const std::optional<Eigen::Vector4d>& source_ground,
                                            double translation_disagreement, double rotation_disagreement_degrees,
-                                           const DenseSearchOptions& options) {
+                                           const DenseSearchOptions& options, const OptimumScreen& screen) {
   validate_dense_search_options(options);
   DenseSearchResult result;
   const PreparedPair pair = sample(prepared, options);
@@ -483,7 +490,15 @@ DenseSearchResult search_weakest_direction(const DenseSearchPair& prepared, cons
   // the same winners as one full-size pass in about a third of the time.
   result.optima = run_coarse_pass(pair, starts, source_ground, options);
   std::vector<std::pair<std::size_t, std::size_t>> twins;
-  refine_contenders(pair, choose_contenders(result, options, twins), source_ground, options, result.optima);
+  const std::vector<std::size_t> contenders = choose_contenders(result, options, twins);
+  refine_contenders(pair, contenders, source_ground, options, result.optima);
+  if (screen) {
+    tbb::parallel_for(std::size_t(0), contenders.size(), [&](std::size_t k) {
+      DenseOptimum& optimum = result.optima[contenders[k]];
+      optimum.screened_out = screen(optimum.transform);
+    });
+    for (const std::size_t k : contenders) result.screened_out += result.optima[k].screened_out ? 1 : 0;
+  }
   // A start that reached a contender's local optimum shares its refinement (refining it again gives
   // the same result): a search with many starts near the truth is not left unsettled for them.
   for (const auto& [twin, contender] : twins) {

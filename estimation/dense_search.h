@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -61,7 +62,12 @@ struct DenseOptimum {
   double overlap = 0.0;                                         ///< measure_overlap's fraction there (same sampling for every optimum)
   double median_residual = 0.0;                                 ///< median point-to-plane distance of its ICP pairs, m
   bool refined = false;                                         ///< refined on all samples (else the first pass's third, too far below the best to matter)
+  bool screened_out = false;                                    ///< refined, and the search's screen ruled it out: neither best nor rival while another optimum is not
 };
+
+/// Rules out a refined optimum of a dense search by its transform (true: neither best nor rival),
+/// e.g. one that puts façades where the other sensor saw through (check_free_space).
+using OptimumScreen = std::function<bool(const Eigen::Isometry3d&)>;
 
 /// What search_weakest_direction found.
 struct DenseSearchResult {
@@ -73,6 +79,7 @@ struct DenseSearchResult {
   double margin = 0.0;                                           ///< best overlap minus the rival's (the best overlap when there is no rival)
   bool best_in_searched_region = false;                         ///< global starts were given, or the best lies inside the grid of starts (within range - step along, across_range across); else the search cannot settle
   std::size_t unrefined_contenders = 0;                          ///< optima within refine_band of the best left unrefined (beyond max_refined): the search cannot settle
+  std::size_t screened_out = 0;                                  ///< refined optima the screen ruled out (distinct local optima, twins not counted)
   std::size_t source_points = 0;                                 ///< thinned source points ICP aligned
   std::size_t target_points = 0;                                 ///< thinned target points with a normal
 };
@@ -134,14 +141,16 @@ DenseSearchResult search_weakest_direction(const PointCloud& source, const Point
                                            const DenseSearchOptions& options = {});
 
 /// search_weakest_direction over clouds already prepared: `options.voxel_size` and
-/// `options.normal_neighbours` must be those `pair` was prepared with (else quadrix::Error).
+/// `options.normal_neighbours` must be those `pair` was prepared with (else quadrix::Error). When
+/// `screen` is given, every refined optimum it rules out is neither the best nor the rival, unless
+/// it rules out all the refined ones.
 DenseSearchResult search_weakest_direction(const DenseSearchPair& pair, const Eigen::Isometry3d& answer,
                                            const std::vector<Eigen::Isometry3d>& other_starts,
                                            const std::vector<Eigen::Isometry3d>& global_starts,
                                            const std::optional<Eigen::Vector3d>& up,
                                            const std::optional<Eigen::Vector4d>& source_ground,
                                            double translation_disagreement, double rotation_disagreement_degrees,
-                                           const DenseSearchOptions& options = {});
+                                           const DenseSearchOptions& options = {}, const OptimumScreen& screen = {});
 
 /// Translations that land the most source points in space the target occupies under `rotation`,
 /// best first (at most `count`, at least 3 m apart): the count of up to 300 source points (an even

@@ -99,6 +99,10 @@ RegistrationStatus decide_registration_status(const RegistrationFindings& findin
 
 namespace {
 
+// Fewer points tested than this on either side judge nothing in the free-space check: a share of
+// a few dozen points moves by tenths with a single car.
+constexpr std::size_t kMinimumFreeSpaceTested = 100;
+
 // Records `findings` and the status they decide; an answer that is neither ok nor ambiguous is the identity.
 void decide(RegistrationResult& result) {
   result.status = decide_registration_status(result.findings);
@@ -498,6 +502,8 @@ std::string describe_dense_search(const DenseSearchResult& search, const Registr
   } else {
     why << ", every start reached it";
   }
+  if (search.screened_out > 0)
+    why << " (" << search.screened_out << " optima left out: they put points in the other sensor's free space)";
   if (result.findings.settled_by_dense_search) {
     why << ": settled (margin " << search.margin << ")";
     if (result.findings.dense_search_unclear)
@@ -578,8 +584,10 @@ Eigen::Vector3d target_up(const RegistrationResult& result, const RegistrationOp
   return result.target_model.has_ground ? result.target_model.ground_normal : options.target_extraction.up.normalized();
 }
 
-// Settles an `ambiguous` answer with the dense search along the weakest direction (search_weakest_direction).
-void settle_with_dense_search(RegistrationResult& result, const DenseSearchPair& prepared, const RegistrationOptions& options) {
+// Settles an `ambiguous` answer with the dense search along the weakest direction
+// (search_weakest_direction), leaving out the optima `screen` rules out.
+void settle_with_dense_search(RegistrationResult& result, const DenseSearchPair& prepared, const RegistrationOptions& options,
+                              const OptimumScreen& screen) {
   std::vector<Eigen::Isometry3d> other_starts;
   for (std::size_t i = 0; i < result.candidates.size(); ++i)
     if (result.candidates[i].valid && i != result.best_candidate) other_starts.push_back(result.candidates[i].transform);
@@ -592,7 +600,7 @@ void settle_with_dense_search(RegistrationResult& result, const DenseSearchPair&
   if (result.target_model.has_ground) up = result.target_model.ground_normal;
   const DenseSearchResult search = search_weakest_direction(
       prepared, result.transform, other_starts, global_starts, up, ground_of(result.source_model),
-      options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search);
+      options.ambiguity.translation_disagreement, options.ambiguity.rotation_disagreement_degrees, options.dense_search, screen);
   const bool settled = dense_search_settles(search, options.dense_search);
   result.findings.settled_by_dense_search = settled;
   result.findings.dense_search_unclear = settled && search.margin < options.dense_search.ok_margin;
@@ -620,7 +628,8 @@ void settle_with_dense_search(RegistrationResult& result, const DenseSearchPair&
 }  // namespace
 
 void check_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                     const RegistrationOptions& options, bool may_replace, const DenseSearchPair* prepared) {
+                     const RegistrationOptions& options, bool may_replace, const DenseSearchPair* prepared,
+                     const OptimumScreen& screen) {
   const AmbiguityOptions& ambiguity = options.ambiguity;
   if ((result.status != RegistrationStatus::Ok && !(may_replace && result.status == RegistrationStatus::Ambiguous)) ||
       ambiguity.half_turn_margin < 0.0 || source.empty() || target.empty())
@@ -663,7 +672,7 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
     grid.source_samples = ambiguity.half_turn_samples;
     const DenseSearchResult search =
         search_weakest_direction(prepared ? *prepared : DenseSearchPair(source, target, grid), turned, other_starts, {}, up,
-                                 source_ground, ambiguity.translation_disagreement, ambiguity.rotation_disagreement_degrees, grid);
+                                 source_ground, ambiguity.translation_disagreement, ambiguity.rotation_disagreement_degrees, grid, screen);
     // The answer's own optimum is the first start after the grid ("candidate 0"; the identity is
     // last); the rival is the best optimum anywhere that disagrees with it.
     const std::size_t answer_index = search.optima.size() - 1 - other_starts.size();
@@ -675,7 +684,7 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
       const bool disagrees =
           translation_error(optimum.transform, answer.transform) > ambiguity.translation_disagreement ||
           rotation_error_degrees(optimum.transform, answer.transform) > ambiguity.rotation_disagreement_degrees;
-      if (disagrees && (!check.has_rival || optimum.overlap > check.rival_overlap)) {
+      if (disagrees && !optimum.screened_out && (!check.has_rival || optimum.overlap > check.rival_overlap)) {
         check.has_rival = true;
         check.rival_overlap = optimum.overlap;
         check.rival = optimum.transform;
@@ -737,9 +746,6 @@ void check_free_space(RegistrationResult& result, const PointCloud& source, cons
     decide(result);
     return;
   }
-  // Fewer tested points than this on either side judge nothing: a share of a few dozen points
-  // moves by tenths with a single car.
-  constexpr std::size_t kMinimumTested = 100;
   timed(result, "free_space", [&] {
     const FreeSpaceMeasure measure = measure_free_space(source, target, source_image, target_image, result.transform,
                                                         *source_ground, *target_ground, options.free_space_height);
@@ -749,8 +755,8 @@ void check_free_space(RegistrationResult& result, const PointCloud& source, cons
     why << "; free space: " << measure.source_in_target_free_space << " of " << measure.source_tested
         << " source points in the target sensor's, " << measure.target_in_source_free_space << " of "
         << measure.target_tested << " target points in the source sensor's";
-    if (measure.source_tested < kMinimumTested || measure.target_tested < kMinimumTested) {
-      why << ": too few points tested (fewer than " << kMinimumTested << " a side) to judge, not sure";
+    if (measure.source_tested < kMinimumFreeSpaceTested || measure.target_tested < kMinimumFreeSpaceTested) {
+      why << ": too few points tested (fewer than " << kMinimumFreeSpaceTested << " a side) to judge, not sure";
       result.findings.free_space_unjudged = true;
     } else {
       why << " (sum " << measure.sum() << ", limit " << options.free_space_limit << ")";
@@ -912,11 +918,23 @@ bool check_answer(RegistrationResult& result, const CheckInputs& inputs, const R
   if (!searches) return false;
   if (free_space_goes_first(result, inputs, options) && clear_by_free_space(result, inputs, options)) return true;
   const DenseSearchPair& prepared = *inputs.prepared;
-  check_half_turn(result, cropped_source, cropped_target, options, true, &prepared);
+  const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
+  // Optima that put façades where the other sensor saw through are not candidates: with the
+  // free-space check's own rule, the searches pick their best and their rivals among the others.
+  OptimumScreen in_free_space;
+  const AmbiguityOptions& ambiguity = options.ambiguity;
+  if (ambiguity.free_space_screens_optima && ambiguity.free_space_limit >= 0.0 && inputs.source_image && inputs.target_image &&
+      source_ground && target_ground)
+    in_free_space = [&](const Eigen::Isometry3d& transform) {
+      const FreeSpaceMeasure measure = measure_free_space(inputs.source, inputs.target, *inputs.source_image, *inputs.target_image,
+                                                          transform, *source_ground, *target_ground, ambiguity.free_space_height);
+      return measure.source_tested >= kMinimumFreeSpaceTested && measure.target_tested >= kMinimumFreeSpaceTested &&
+             measure.sum() > ambiguity.free_space_limit;
+    };
+  check_half_turn(result, cropped_source, cropped_target, options, true, &prepared, in_free_space);
   if (result.status != RegistrationStatus::Ambiguous || !options.dense_search.enabled) return false;
   // The dense search also starts from the poses of the correlation over yaw and ground translation,
   // which reach answers no quadric candidate is near (hard pairs whose cliques hold no true inlier).
-  const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
   if (options.dense_search.correlation.poses > 0 && source_ground && target_ground)
     timed(result, "ground_correlation", [&] {
       result.ground_correlation =
@@ -928,13 +946,13 @@ bool check_answer(RegistrationResult& result, const CheckInputs& inputs, const R
       if (!poses.empty()) why << ", best lands " << poses.front().share << " of the source cells at yaw " << poses.front().yaw_degrees << " deg";
       result.message += why.str();
     });
-  timed(result, "dense_search", [&] { settle_with_dense_search(result, prepared, options); });
+  timed(result, "dense_search", [&] { settle_with_dense_search(result, prepared, options, in_free_space); });
   // The new answer, under the same guards. A half-turned rival that fits it clearly better takes
   // its place, `ambiguous` (the dense search is not run again): on the tuning set under random yaw
   // one settled answer of 68 was a street's mirror image, and its rival the truth.
   if (result.findings.settled_by_dense_search) {
     check_overlap_against(result, cropped_source, *inputs.coverage, options.ambiguity);
-    check_half_turn(result, cropped_source, cropped_target, options, true, &prepared);
+    check_half_turn(result, cropped_source, cropped_target, options, true, &prepared, in_free_space);
   }
   return false;
 }

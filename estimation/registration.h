@@ -81,6 +81,7 @@ struct AmbiguityOptions {
   std::size_t half_turn_correlation_starts = 3;  ///< ICP also starts from the half-turned rotation at this many translations that land the most source points in space the target occupies (correlate_translations; 0: none)
   double half_turn_correlation_reach = 40.0;     ///< those translations are searched this far, m, along the ground from the turned answer's: a street's mirror image can lie anywhere along it
   double free_space_limit = 0.18;             ///< an `ok` answer may put at most this share of each scan's high points in the other sensor's free space, the two shares summed (check_free_space), else `ambiguous` (the answer is kept; negative: no check). The clouds must be in their sensors' frames (ExtractionOptions::sensor_origin); the monument preset, whose stations are merged, turns it off. The middle of the gap on the simulated tuning sets (seeds 1001-1005: HDL-64E as drawn and under random yaw, VLP-16, Livox with both passes one way: 1,200 runs, with the other `ok` margins at their defaults), where the 931 right `ok` answers summed at most 0.100 and the 41 wrong ones at least 0.254 (docs/registration.md, "Free space")
+  bool free_space_screens_optima = true;       ///< the dense search and the half-turn check leave out of their best and their rivals every refined optimum the free-space check would demote (more than free_space_limit, judged on 100 points a side or more): on the tuning sets this took VLP-16 success from 210 to 263 of 300 and Livox (both passes one way) from 213 to 237, `ok` and wrong still none (docs/registration.md, "Free space")
   double free_space_height = 2.0;             ///< the free-space check tests points standing more than this above their scan's ground, m: cars and people that moved between the scans stand lower (at 0.5 m, right answers of the HDL-64E tuning set summed up to 0.63, parked cars that differ between the passes)
 };
 
@@ -270,10 +271,12 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 /// the dense search to settle. The pivot comes from `result.overlap` when set, so check_overlap must
 /// have measured the current answer (verify_registration keeps that order). `prepared`, when given,
 /// holds `source` and `target` already prepared with `options.dense_search` (verify_registration
-/// shares one between its checks); else they are prepared here. Adds the "half_turn" timing;
-/// verify_registration calls it.
+/// shares one between its checks); else they are prepared here. An optimum `screen` rules out is
+/// never the rival (verify_registration passes the free-space check's rule when
+/// `ambiguity.free_space_screens_optima`). Adds the "half_turn" timing; verify_registration calls it.
 void check_half_turn(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
-                     const RegistrationOptions& options, bool may_replace = true, const DenseSearchPair* prepared = nullptr);
+                     const RegistrationOptions& options, bool may_replace = true, const DenseSearchPair* prepared = nullptr,
+                     const OptimumScreen& screen = {});
 
 /// Checks an `ok` answer against what each sensor saw as empty (beyond the paper): measure_free_space
 /// of the answer, with each scan's range image around its extraction's sensor_origin and the points

@@ -215,6 +215,61 @@ TEST(DenseSearch, APreparedPairServesEverySearchAsItsOwnPreparationWould) {
   EXPECT_THROW(search_weakest_direction(prepared, off, starts, {}, std::nullopt, std::nullopt, 2.0, 5.0, other_normals), Error);
 }
 
+// refine_answer is the search's own refinement of its answer's start: the same optimum to the last
+// bit, with the same overlap, and near the truth from 2.5 m off.
+TEST(DenseSearch, RefiningTheAnswerGivesTheSearchsOptimumForIt) {
+  std::mt19937 rng(17);
+  const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(2.0, 0.5, 6.0), 20.0, 40000, rng);
+  Eigen::Isometry3d off = pair.truth;
+  off.pretranslate(Eigen::Vector3d(0.6, 0.3, 0.0));
+  DenseSearchOptions options;
+  options.range = options.across_range = 0.0;  // one grid start: the answer
+  const DenseSearchPair prepared(pair.source, pair.target, options);
+  const DenseSearchResult search =
+      search_weakest_direction(prepared, off, {}, {}, Eigen::Vector3d::UnitZ(), std::nullopt, 2.0, 5.0, options);
+  const DenseOptimum& searched = search.optima.front();
+  ASSERT_TRUE(searched.refined);
+  const DenseOptimum refined = refine_answer(prepared, off, std::nullopt, options);
+  EXPECT_TRUE(refined.refined);
+  EXPECT_TRUE(refined.transform.isApprox(searched.transform, 0.0));
+  EXPECT_EQ(refined.overlap, searched.overlap);
+  EXPECT_LT(translation_error(refined.transform, pair.truth), 0.05);
+}
+
+// A screened-out optimum is neither the best nor the rival, and the best is picked among the
+// others; a screen that rules out every optimum leaves the pick as it was.
+TEST(DenseSearch, AScreenedOutOptimumIsNeitherTheBestNorTheRival) {
+  std::mt19937 rng(23);
+  const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(2.0, 0.5, 6.0), 20.0, 40000, rng);
+  Eigen::Isometry3d off = pair.truth;
+  off.pretranslate(Eigen::Vector3d(2.5, 0.4, 0.0));
+  const DenseSearchOptions options;
+  const DenseSearchPair prepared(pair.source, pair.target, options);
+  const auto search = [&](const OptimumScreen& screen) {
+    return search_weakest_direction(prepared, off, {pair.truth}, {}, Eigen::Vector3d::UnitZ(), std::nullopt, 2.0, 5.0, options,
+                                    screen);
+  };
+  const DenseSearchResult open = search({});
+  ASSERT_LT(translation_error(open.optima[open.best].transform, pair.truth), 0.05);
+  EXPECT_EQ(open.screened_out, 0u);
+  const auto near_truth = [&](const Eigen::Isometry3d& transform) { return translation_error(transform, pair.truth) < 0.5; };
+  const DenseSearchResult screened = search(near_truth);
+  EXPECT_GE(screened.screened_out, 1u);
+  EXPECT_FALSE(screened.optima[screened.best].screened_out);
+  EXPECT_GT(translation_error(screened.optima[screened.best].transform, pair.truth), 0.5);
+  if (screened.rival) {
+    EXPECT_FALSE(screened.optima[*screened.rival].screened_out);
+  }
+  for (const DenseOptimum& optimum : screened.optima) {
+    if (optimum.refined && near_truth(optimum.transform)) {
+      EXPECT_TRUE(optimum.screened_out) << optimum.start;
+    }
+  }
+  const DenseSearchResult all_out = search([](const Eigen::Isometry3d&) { return true; });
+  EXPECT_EQ(all_out.best, open.best);
+  EXPECT_EQ(all_out.margin, open.margin);
+}
+
 // ICP finds its point pairs in parallel blocks and sums them in point order: every optimum is the
 // same to the last bit on one thread as on many.
 TEST(DenseSearch, OptimaDoNotDependOnTheThreadCount) {
