@@ -140,6 +140,21 @@ Scene lot_of_boxes(std::mt19937& rng) {
   return lot;
 }
 
+// The colonnade scanned from 2 m along, 0.5 m across and 6 degrees turned, and an answer 2.5 m
+// off the truth along it (two pillars).
+struct OffColonnade {
+  ScannedPair pair;
+  Eigen::Isometry3d off;
+};
+
+OffColonnade off_colonnade(unsigned seed) {
+  std::mt19937 rng(seed);
+  OffColonnade colonnade{scan_pair(colonnade_with_curved_wall(), pose(2.0, 0.5, 6.0), 20.0, 40000, rng), {}};
+  colonnade.off = colonnade.pair.truth;
+  colonnade.off.pretranslate(Eigen::Vector3d(2.5, 0.4, 0.0));
+  return colonnade;
+}
+
 TEST(DenseSearch, PointToPlaneIcpRecoversASmallOffset) {
   std::mt19937 rng(3);
   const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(1.0, 0.5, 4.0), 20.0, 40000, rng);
@@ -239,10 +254,9 @@ TEST(DenseSearch, RefiningTheAnswerGivesTheSearchsOptimumForIt) {
 // A screened-out optimum is neither the best nor the rival, and the best is picked among the
 // others; a screen that rules out every optimum leaves the pick as it was.
 TEST(DenseSearch, AScreenedOutOptimumIsNeitherTheBestNorTheRival) {
-  std::mt19937 rng(23);
-  const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(2.0, 0.5, 6.0), 20.0, 40000, rng);
-  Eigen::Isometry3d off = pair.truth;
-  off.pretranslate(Eigen::Vector3d(2.5, 0.4, 0.0));
+  const OffColonnade colonnade = off_colonnade(23);
+  const ScannedPair& pair = colonnade.pair;
+  const Eigen::Isometry3d& off = colonnade.off;
   const DenseSearchOptions options;
   const DenseSearchPair prepared(pair.source, pair.target, options);
   const auto search = [&](const OptimumScreen& screen) {
@@ -273,10 +287,9 @@ TEST(DenseSearch, AScreenedOutOptimumIsNeitherTheBestNorTheRival) {
 // ICP finds its point pairs in parallel blocks and sums them in point order: every optimum is the
 // same to the last bit on one thread as on many.
 TEST(DenseSearch, OptimaDoNotDependOnTheThreadCount) {
-  std::mt19937 rng(21);
-  const ScannedPair pair = scan_pair(colonnade_with_curved_wall(), pose(2.0, 0.5, 6.0), 20.0, 40000, rng);
-  Eigen::Isometry3d off = pair.truth;
-  off.pretranslate(Eigen::Vector3d(2.5, 0.4, 0.0));
+  const OffColonnade colonnade = off_colonnade(21);
+  const ScannedPair& pair = colonnade.pair;
+  const Eigen::Isometry3d& off = colonnade.off;
   const DenseSearchOptions options;
   const auto search = [&] {
     return search_weakest_direction(pair.source, pair.target, off, {pair.truth}, {}, Eigen::Vector3d::UnitZ(), std::nullopt,

@@ -680,9 +680,7 @@ TEST(CheckFreeSpace, TheTruthStaysOkAndItsMirrorImageIsAmbiguous) {
 // half-turn check and the dense search, and their new answer is judged again.
 TEST(VerifyRegistration, TheFreeSpaceCheckClearsAnOkAnswerBeforeTheHalfTurnCheck) {
   const OppositeScans scans = opposite_scans(observe_visible);
-  const RegistrationResult& registered = scans.registered;
-  ASSERT_EQ(registered.status, RegistrationStatus::Ok) << registered.message;
-  EXPECT_TRUE(registration_succeeded(registered.transform, scans.truth)) << registered.message;
+  const RegistrationResult& registered = scans.registered;  // `ok` and right (CheckFreeSpace above)
   EXPECT_FALSE(registered.half_turn.has_value()) << registered.message;
   EXPECT_EQ(registered.timings_ms.count("half_turn"), 0u);
   EXPECT_GT(registered.timings_ms.at("answer_refinement"), 0.0);
