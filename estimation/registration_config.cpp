@@ -170,7 +170,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_correlation_starts>("ambiguity.half_turn_correlation_starts", "ICP also starts from the turned rotation at this many translations that land the most source points in occupied target space, starts"),
       shared_key<&R::ambiguity, &AmbiguityOptions::half_turn_correlation_reach>("ambiguity.half_turn_correlation_reach", "how far along the ground those translations are searched from the turned answer's, m"),
       shared_key<&R::ambiguity, &AmbiguityOptions::free_space_limit>("ambiguity.free_space_limit", "an ok answer may put at most this share of each scan's high points in the other sensor's free space, both shares summed, else ambiguous (the answer is kept; negative: no check; clouds in their sensors' frames)"),
-      shared_key<&R::ambiguity, &AmbiguityOptions::free_space_screens_optima>("ambiguity.free_space_screens_optima", "the dense search leaves out of its best and its rival every optimum the free-space check would demote"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::free_space_screens_optima>("ambiguity.free_space_screens_optima", "the dense search and the half-turn check leave out of their best and their rivals every refined optimum the free-space check would demote"),
       shared_key<&R::ambiguity, &AmbiguityOptions::free_space_height>("ambiguity.free_space_height", "the free-space check tests points standing more than this above their scan's ground, m (>= 0)"),
       // dense_search
       shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),
