@@ -294,16 +294,19 @@ void check_free_space(RegistrationResult& result, const PointCloud& source, cons
 /// extraction's range limits around the sensor (the platform's own hits are not scene), leaves out
 /// their isolated points (without_isolated_points, `options.ambiguity.isolation_cell`; counted in
 /// result.counts), hashes the target once for every overlap, prepares both clouds once for every
-/// ICP search (DenseSearchPair, when the answer is `ok` or `ambiguous`), runs check_overlap and check_half_turn,
-/// then settles an `ambiguous` answer with search_weakest_direction when
-/// `options.dense_search.enabled`, started also from the poses of correlate_over_ground when both
-/// models have a ground: when the best optimum beats every distinct
-/// optimum's overlap by `decisive_margin` it becomes the answer, `ok`, and check_overlap and
-/// check_half_turn run again on it (a half-turned rival that fits clearly better replaces it,
-/// `ambiguous`); otherwise the quadric answer stands, `ambiguous`. Last, check_free_space on the
-/// final answer (each cloud's range image is made with the checks' points). Adds "check_inputs",
-/// "overlap", "dense_preparation", "half_turn", "ground_correlation", "dense_search" and
-/// "free_space" timings. `source_extraction` and `target_extraction`, when given, are the
+/// ICP search (DenseSearchPair, when the answer is `ok` or `ambiguous`), and runs check_overlap.
+/// An `ok` answer is then refined by ICP (refine_answer, when `adopt_icp_optimum`) and checked by
+/// check_free_space first (each cloud's range image is made with the checks' points): one it
+/// clears is done. Otherwise check_half_turn runs, then an `ambiguous` answer is settled with
+/// search_weakest_direction when `options.dense_search.enabled`, started also from the poses of
+/// correlate_over_ground when both models have a ground: when the best optimum beats every
+/// distinct optimum's overlap by `decisive_margin` it becomes the answer, `ok`, and check_overlap
+/// and check_half_turn run again on it (a half-turned rival that fits clearly better replaces it,
+/// `ambiguous`); otherwise the quadric answer stands, `ambiguous`. Both searches leave out the
+/// optima check_free_space would demote when `ambiguity.free_space_screens_optima`. Last,
+/// check_free_space on an `ok` answer it has not judged. Adds "check_inputs", "overlap",
+/// "dense_preparation", and, when they ran, "answer_refinement", "half_turn",
+/// "ground_correlation", "dense_search" and "free_space" timings. `source_extraction` and `target_extraction`, when given, are the
 /// extractions of the two clouds: the points they worked on (ExtractionResult::measured) are
 /// taken as the checks' points when they were chosen by the checks' own range limits and
 /// isolated-point rule (else the clouds are cropped and filtered here).
