@@ -103,6 +103,16 @@ namespace {
 // a few dozen points moves by tenths with a single car.
 constexpr std::size_t kMinimumFreeSpaceTested = 100;
 
+// Whether a free-space measure judges its answer at all (enough points tested each way).
+bool free_space_judges(const FreeSpaceMeasure& measure) {
+  return measure.source_tested >= kMinimumFreeSpaceTested && measure.target_tested >= kMinimumFreeSpaceTested;
+}
+
+// Whether a free-space measure demotes its answer for points in free space (check_free_space's rule).
+bool puts_points_in_free_space(const FreeSpaceMeasure& measure, const AmbiguityOptions& options) {
+  return free_space_judges(measure) && measure.sum() > options.free_space_limit;
+}
+
 // Records `findings` and the status they decide; an answer that is neither ok nor ambiguous is the identity.
 void decide(RegistrationResult& result) {
   result.status = decide_registration_status(result.findings);
@@ -755,12 +765,12 @@ void check_free_space(RegistrationResult& result, const PointCloud& source, cons
     why << "; free space: " << measure.source_in_target_free_space << " of " << measure.source_tested
         << " source points in the target sensor's, " << measure.target_in_source_free_space << " of "
         << measure.target_tested << " target points in the source sensor's";
-    if (measure.source_tested < kMinimumFreeSpaceTested || measure.target_tested < kMinimumFreeSpaceTested) {
+    if (!free_space_judges(measure)) {
       why << ": too few points tested (fewer than " << kMinimumFreeSpaceTested << " a side) to judge, not sure";
       result.findings.free_space_unjudged = true;
     } else {
       why << " (sum " << measure.sum() << ", limit " << options.free_space_limit << ")";
-      result.findings.in_free_space = measure.sum() > options.free_space_limit;
+      result.findings.in_free_space = puts_points_in_free_space(measure, options);
       if (result.findings.in_free_space) why << ": more than the limit, not sure";
     }
     result.message += why.str();
@@ -867,11 +877,11 @@ CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, c
   return inputs;
 }
 
-// Whether the free-space check can clear an `ok` answer before the half-turn check: both run, and
-// the images are made.
+// Whether the free-space check can clear an `ok` answer before the half-turn check: the half-turn
+// check is on, and the images are made (prepare_checks makes them only when the free-space check is).
 bool free_space_goes_first(const RegistrationResult& result, const CheckInputs& inputs, const RegistrationOptions& options) {
-  return result.status == RegistrationStatus::Ok && inputs.prepared && inputs.source_image && inputs.target_image &&
-         options.ambiguity.half_turn_margin >= 0.0 && options.ambiguity.free_space_limit >= 0.0;
+  return result.status == RegistrationStatus::Ok && inputs.source_image && inputs.target_image &&
+         options.ambiguity.half_turn_margin >= 0.0;
 }
 
 // An `ok` answer, refined by point-to-plane ICP (when adopt_icp_optimum) and then checked against
@@ -923,13 +933,12 @@ bool check_answer(RegistrationResult& result, const CheckInputs& inputs, const R
   // free-space check's own rule, the searches pick their best and their rivals among the others.
   OptimumScreen in_free_space;
   const AmbiguityOptions& ambiguity = options.ambiguity;
-  if (ambiguity.free_space_screens_optima && ambiguity.free_space_limit >= 0.0 && inputs.source_image && inputs.target_image &&
-      source_ground && target_ground)
+  if (ambiguity.free_space_screens_optima && inputs.source_image && inputs.target_image && source_ground && target_ground)
     in_free_space = [&](const Eigen::Isometry3d& transform) {
-      const FreeSpaceMeasure measure = measure_free_space(inputs.source, inputs.target, *inputs.source_image, *inputs.target_image,
-                                                          transform, *source_ground, *target_ground, ambiguity.free_space_height);
-      return measure.source_tested >= kMinimumFreeSpaceTested && measure.target_tested >= kMinimumFreeSpaceTested &&
-             measure.sum() > ambiguity.free_space_limit;
+      return puts_points_in_free_space(measure_free_space(inputs.source, inputs.target, *inputs.source_image,
+                                                          *inputs.target_image, transform, *source_ground, *target_ground,
+                                                          ambiguity.free_space_height),
+                                       ambiguity);
     };
   check_half_turn(result, cropped_source, cropped_target, options, true, &prepared, in_free_space);
   if (result.status != RegistrationStatus::Ambiguous || !options.dense_search.enabled) return false;

@@ -38,8 +38,8 @@ namespace {
 // runs a pipeline of such stages over clouds of similar size, so it keeps freed memory for reuse:
 // blocks below 32 MiB come from the heap, which grows 64 MiB at a time and is not trimmed. On the
 // 14 KITTI pairs of pairs.tsv (`quadrix bench`) this took the page faults from 35-52 k to 13 k
-// and the CPU time by 5-8%, at the price of a process keeping its peak heap until it exits
-// (docs/registration.md, "Time").
+// and the CPU time by 3-7% (perf stat, four runs each), at the price of a process keeping its
+// peak heap until it exits (docs/registration.md, "Time").
 void keep_freed_memory_for_reuse() {
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TOP_PAD, 64 << 20);
