@@ -68,6 +68,23 @@ const char* registration_status_name(RegistrationStatus status) {
   return "failed";
 }
 
+PointCloud centred_on_sensor(PointCloud cloud, const Eigen::Vector3d& sensor_origin) {
+  if (!sensor_origin.allFinite()) throw Error("the sensor origin must be finite");
+  for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i)
+    cloud.positions.col(i) = (cloud.positions.col(i).cast<double>() - sensor_origin).cast<float>();
+  return cloud;
+}
+
+Eigen::Isometry3d between_cloud_frames(const Eigen::Isometry3d& between_sensors, const Eigen::Vector3d& source_origin,
+                                       const Eigen::Vector3d& target_origin) {
+  return Eigen::Translation3d(target_origin) * between_sensors * Eigen::Translation3d(-source_origin);
+}
+
+Eigen::Isometry3d between_sensor_frames(const Eigen::Isometry3d& between_clouds, const Eigen::Vector3d& source_origin,
+                                        const Eigen::Vector3d& target_origin) {
+  return Eigen::Translation3d(-target_origin) * between_clouds * Eigen::Translation3d(source_origin);
+}
+
 double translation_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
   return (estimate.translation() - truth.translation()).norm();
 }

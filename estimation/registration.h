@@ -314,6 +314,22 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
                          const RegistrationOptions& options, const ExtractionResult* source_extraction = nullptr,
                          const ExtractionResult* target_extraction = nullptr);
 
+/// `cloud` (every field kept) moved by -sensor_origin, so that its sensor stands at the origin: the
+/// frame the pipeline measures ranges, free space and rotations in, for a cloud given in another
+/// frame (a map's) with its sensor at `sensor_origin`. Throws quadrix::Error for a non-finite origin.
+PointCloud centred_on_sensor(PointCloud cloud, const Eigen::Vector3d& sensor_origin);
+
+/// A transform between sensor-centred clouds (centred_on_sensor) as one between the clouds' own
+/// frames: Tr(target_origin) * between_sensors * Tr(-source_origin).
+Eigen::Isometry3d between_cloud_frames(const Eigen::Isometry3d& between_sensors, const Eigen::Vector3d& source_origin,
+                                       const Eigen::Vector3d& target_origin);
+
+/// The inverse of between_cloud_frames: Tr(-target_origin) * between_clouds * Tr(source_origin). The
+/// paper's RTE is measured between sensor frames; in a frame whose origin lies far from the sensors,
+/// a small rotation error would add a large translation error.
+Eigen::Isometry3d between_sensor_frames(const Eigen::Isometry3d& between_clouds, const Eigen::Vector3d& source_origin,
+                                        const Eigen::Vector3d& target_origin);
+
 /// Relative translation error ||t - t_gt||, metres (paper's RTE).
 double translation_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);
 /// Relative rotation error arccos((tr(R^T R_gt) - 1) / 2), degrees (paper's RRE), accurate near 0.

@@ -12,7 +12,10 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <map>
+#include <sstream>
+#include <string>
 
 namespace quadrix {
 
@@ -392,6 +395,29 @@ void describe_extraction(ExtractionResult& result, std::size_t points_in_range) 
   }
 }
 
+// Why nothing is in range, with the nearest and farthest point's distance from the sensor: a cloud
+// whose points all lie beyond the maximum range is most often in another frame than its sensor's
+// (a map's), where the range limits measure from a point the sensor never stood at.
+std::string no_point_in_range_message(const Eigen::Matrix3Xd& points, const ExtractionOptions& options) {
+  double nearest = std::numeric_limits<double>::infinity();
+  double farthest = 0.0;
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    const double distance = (points.col(i) - options.sensor_origin).norm();
+    if (!std::isfinite(distance)) continue;
+    nearest = std::min(nearest, distance);
+    farthest = std::max(farthest, distance);
+  }
+  std::ostringstream message;
+  message.precision(4);
+  message << "no point within the range limits (" << options.minimum_range << " to " << options.maximum_range
+          << " m from the sensor at (" << options.sensor_origin.x() << ", " << options.sensor_origin.y() << ", "
+          << options.sensor_origin.z() << "))";
+  if (std::isfinite(nearest)) message << "; the points lie " << nearest << " to " << farthest << " m from it";
+  if (std::isfinite(nearest) && options.maximum_range > 0.0 && nearest > options.maximum_range)
+    message << ": is the cloud in its sensor's frame, with the sensor at the origin?";
+  return message.str();
+}
+
 }  // namespace
 
 ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
@@ -438,8 +464,7 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
     result.status = ExtractionStatus::EmptyCloud;
     result.message = cloud.empty() ? "the cloud has no points"
                      : result.points_in_range == 0
-                         ? "no point within the range limits (" + std::to_string(options.minimum_range) + " to " +
-                               std::to_string(options.maximum_range) + " m)"
+                         ? no_point_in_range_message(points, options)
                          : "every one of the " + std::to_string(result.points_in_range) +
                                " points in range is isolated (no other point within its cube of " +
                                std::to_string(options.isolation_cell) + " m or the 26 around)";

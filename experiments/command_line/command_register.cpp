@@ -1,8 +1,10 @@
 // `quadrix register SOURCE TARGET [--preset vlp64|vlp16|mid360|avia|monument|auto] [--config FILE.yaml]
-// [--source-preset P --target-preset P] [--labels-source F --labels-target F [--label-classes C,...]] [--gt FILE] [--out DIR]`:
+// [--source-preset P --target-preset P] [--source-origin X,Y,Z --target-origin X,Y,Z]
+// [--labels-source F --labels-target F [--label-classes C,...]] [--gt FILE] [--out DIR]`:
 // global registration of two clouds with quadrics (paper Fig. overview, Algorithm 1). Prints the 4x4
 // transform mapping SOURCE points into the TARGET frame and a one-line summary; with --gt also RTE,
-// RRE and success (2 m / 5 deg); with --out writes report.json, merged.ply, bev.png, both models
+// RRE and success (2 m / 5 deg, between the sensors' frames); --source-origin/--target-origin give
+// where each sensor stood in its file's frame (the clouds are registered centred there); with --out writes report.json, merged.ply, bev.png, both models
 // (source_model.json, target_model.json) and the interactive page view.html (unless --no-page).
 // The exit status is 0 whenever a registration ran (its status says ok / ambiguous / degenerate /
 // failed); 2 on bad input (unreadable file, unknown preset or config key).
@@ -20,6 +22,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace quadrix::cli {
 namespace {
@@ -30,6 +33,8 @@ struct RegisterCommandOptions {
   std::string preset = "auto"; ///< preset of both sides, or auto
   std::string source_preset;   ///< overrides --preset for the source
   std::string target_preset;   ///< overrides --preset for the target
+  std::vector<double> source_origin{0.0, 0.0, 0.0};  ///< where the source's sensor stood in the source file's frame
+  std::vector<double> target_origin{0.0, 0.0, 0.0};  ///< where the target's sensor stood in the target file's frame
   std::string config;          ///< YAML overrides applied after the presets
   std::string labels_source;   ///< SemanticKITTI labels of the source
   std::string labels_target;   ///< SemanticKITTI labels of the target
@@ -44,12 +49,25 @@ void run(const RegisterCommandOptions& options) {
   using Clock = std::chrono::steady_clock;
   if (!options.config.empty() && !std::filesystem::exists(options.config))
     throw file_error(options.config, "configuration file does not exist");
+  // Clouds in another frame than their sensors' (a map's) are registered centred on their sensors,
+  // where ranges, free space and rotations mean what the pipeline assumes; the answer printed and
+  // the ground truth compared are between the files' own frames.
+  const Eigen::Vector3d source_origin(options.source_origin.data());
+  const Eigen::Vector3d target_origin(options.target_origin.data());
+  if (!source_origin.allFinite()) throw Error("--source-origin: expected three finite numbers X,Y,Z in metres");
+  if (!target_origin.allFinite()) throw Error("--target-origin: expected three finite numbers X,Y,Z in metres");
+  const bool centred = !source_origin.isZero(0.0) || !target_origin.isZero(0.0);
   std::optional<Eigen::Isometry3d> ground_truth;
-  if (!options.ground_truth.empty()) ground_truth = read_pose_matrix(options.ground_truth);
+  if (!options.ground_truth.empty())
+    ground_truth = between_sensor_frames(read_pose_matrix(options.ground_truth), source_origin, target_origin);
 
   const Clock::time_point start = Clock::now();
-  const PointCloud source = read_point_cloud(options.source);
-  const PointCloud target = read_point_cloud(options.target);
+  PointCloud source = read_point_cloud(options.source);
+  PointCloud target = read_point_cloud(options.target);
+  if (centred) {
+    source = centred_on_sensor(std::move(source), source_origin);
+    target = centred_on_sensor(std::move(target), target_origin);
+  }
   std::vector<std::uint32_t> source_labels;
   std::vector<std::uint32_t> target_labels;
   if (!options.labels_source.empty()) source_labels = read_semantic_kitti_labels(options.labels_source, source.size());
@@ -80,7 +98,7 @@ void run(const RegisterCommandOptions& options) {
   std::printf("quadrix register %s -> %s  (presets: source %s, target %s)\n", options.source.c_str(), options.target.c_str(),
               registration.source_extraction.preset.c_str(), registration.target_extraction.preset.c_str());
   if (!notes.empty()) std::printf("%s\n", notes.c_str());
-  const Eigen::Matrix4d matrix = result.transform.matrix();
+  const Eigen::Matrix4d matrix = between_cloud_frames(result.transform, source_origin, target_origin).matrix();
   for (int r = 0; r < 4; ++r)
     std::printf("%12.6f %12.6f %12.6f %12.6f\n", matrix(r, 0), matrix(r, 1), matrix(r, 2), matrix(r, 3));
   const RegistrationCounts& c = result.counts;
@@ -118,9 +136,13 @@ void run(const RegisterCommandOptions& options) {
     context.total_ms = total_ms;
     context.ground_truth = ground_truth;
     context.overlap = overlap;
+    context.source_sensor_origin = source_origin;
+    context.target_sensor_origin = target_origin;
     const std::filesystem::path folder(options.out);
     write_registration_report((folder / "report.json").string(), result, context);
-    write_point_cloud((folder / "merged.ply").string(), merge_aligned_clouds(source, target, result.transform));
+    // merged.ply in the target file's frame; the picture, the models and the page stay sensor-centred.
+    write_point_cloud((folder / "merged.ply").string(),
+                      centred_on_sensor(merge_aligned_clouds(source, target, result.transform), -target_origin));
     write_birds_eye_png((folder / "bev.png").string(), source, target, result.transform);
     // The models, so `quadrix view DIR` can draw the clique's correspondences between record centres.
     write_scene_model_json((folder / "source_model.json").string(), result.source_model);
@@ -160,6 +182,16 @@ const CommandRegistration registration(60, [](CLI::App& app) {
       ->capture_default_str();
   command->add_option("--source-preset", options->source_preset, "Preset of the source only (cross-sensor pairs)");
   command->add_option("--target-preset", options->target_preset, "Preset of the target only (cross-sensor pairs)");
+  command->add_option("--source-origin", options->source_origin,
+                      "Where the source's sensor stood in the source file's frame, X,Y,Z in metres (default: the origin). "
+                      "For clouds in a map's frame: they are registered centred on their sensors, and the transform "
+                      "printed maps the source file's frame into the target file's")
+      ->expected(3)
+      ->delimiter(',');
+  command->add_option("--target-origin", options->target_origin,
+                      "Where the target's sensor stood in the target file's frame, X,Y,Z in metres (default: the origin)")
+      ->expected(3)
+      ->delimiter(',');
   command->add_option("--config", options->config, "YAML overrides (keys: quadrix config --schema); unknown keys are errors");
   command->add_option("--labels-source", options->labels_source, "SemanticKITTI .label file of the source");
   command->add_option("--labels-target", options->labels_target, "SemanticKITTI .label file of the target");

@@ -126,6 +126,14 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
                      {"source_preset", context.source_preset},
                      {"target_preset", context.target_preset},
                      {"preset_notes", context.preset_notes}};
+  if (!context.source_sensor_origin.isZero(0.0) || !context.target_sensor_origin.isZero(0.0)) {
+    const Eigen::Vector3d& source = context.source_sensor_origin;
+    const Eigen::Vector3d& target = context.target_sensor_origin;
+    report["sensor_origins"] = {
+        {"source", {source.x(), source.y(), source.z()}},
+        {"target", {target.x(), target.y(), target.z()}},
+        {"transform_between_files", matrix_json(between_cloud_frames(result.transform, source, target))}};
+  }
   if (context.overlap)
     report["overlap"] = {{"distance_m", context.overlap->distance},
                          {"transformed", context.overlap->transformed},

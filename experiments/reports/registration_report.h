@@ -26,6 +26,8 @@ struct RegistrationReportContext {
   double total_ms = 0.0;                          ///< files loaded -> transform: reading + register_clouds, ms
   std::optional<Eigen::Isometry3d> ground_truth;  ///< T_gt mapping source into target, when known
   std::optional<OverlapMeasure> overlap;           ///< measure_overlap of the result, when measured
+  Eigen::Vector3d source_sensor_origin = Eigen::Vector3d::Zero();  ///< where the source's sensor stood in its file's frame (the result is between sensor-centred clouds, centred_on_sensor)
+  Eigen::Vector3d target_sensor_origin = Eigen::Vector3d::Zero();  ///< where the target's sensor stood in its file's frame
 };
 
 /// The report as a JSON document (pretty-printed). Keys: "transform" (4x4 row-major list of lists),
@@ -35,7 +37,10 @@ struct RegistrationReportContext {
 /// level: level, threshold_m, clique_size, refinement_status, valid, selected, score, pair_count,
 /// filtered_count, term_count, factor_count, transform, note, clique: [[source record, target record], ...] of I*_k),
 /// "best_to_second_ratio", "input"
-/// (paths and presets), with a ground truth "ground_truth" {transform, rte_m, rre_deg, success}, and
+/// (paths and presets), with sensor origins other than zero "sensor_origins" {source, target,
+/// transform_between_files: the answer between the files' own frames (between_cloud_frames); every
+/// other transform of the report is between the sensor-centred clouds}, with a ground truth
+/// "ground_truth" {transform, rte_m, rre_deg, success} between the sensor-centred clouds, and
 /// with a measured overlap "overlap" {distance_m, transformed, identity, sampled_points}; when the
 /// dense search ran, "dense_search" {weakest_direction, weakest_share, best, rival, margin,
 /// source_points, target_points, optima: [{start, overlap, median_residual_m, refined, transform}]}.

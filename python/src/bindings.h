@@ -69,6 +69,9 @@ py::array_t<double> matrix_array(const Eigen::Isometry3d& pose);
 /// A pose from a 4x4 array-like (ValueError for another shape or a last row other than 0 0 0 1).
 Eigen::Isometry3d pose_from_object(const py::handle& value, const char* what);
 
+/// A point from None (the origin) or three finite numbers; ValueError naming `what` otherwise.
+Eigen::Vector3d point_from_object(const py::handle& value, const char* what);
+
 /// Python objects of the JSON text `text` (json.loads).
 py::object json_loads(const std::string& text);
 

@@ -178,6 +178,17 @@ Eigen::Isometry3d pose_from_object(const py::handle& value, const char* what) {
   return pose;
 }
 
+Eigen::Vector3d point_from_object(const py::handle& value, const char* what) {
+  if (value.is_none()) return Eigen::Vector3d::Zero();
+  const auto array = py::array_t<double, py::array::forcecast>::ensure(value);
+  if (!array || array.ndim() != 1 || array.shape(0) != 3)
+    throw py::value_error(std::string(what) + ": expected three numbers (x, y, z in metres)");
+  const auto in = array.unchecked<1>();
+  const Eigen::Vector3d point(in(0), in(1), in(2));
+  if (!point.allFinite()) throw py::value_error(std::string(what) + ": the coordinates must be finite");
+  return point;
+}
+
 py::object json_loads(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
 
 void bind_clouds(py::module_& module) {

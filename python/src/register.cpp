@@ -17,7 +17,9 @@ namespace {
 
 /// What quadrix.register returns.
 struct Registration {
-  RegistrationResult result;  ///< register_clouds' result
+  RegistrationResult result;  ///< register_clouds' result (between the sensor-centred clouds)
+  Eigen::Vector3d source_origin = Eigen::Vector3d::Zero();  ///< where the source's sensor stood in the source's frame
+  Eigen::Vector3d target_origin = Eigen::Vector3d::Zero();  ///< where the target's sensor stood in the target's frame
   std::string json;           ///< registration_report_json: report.json's text
   py::object report;          ///< json.loads(json)
 };
@@ -46,8 +48,13 @@ function builds both), plus the two scene models.
 ``status`` is ok, ambiguous, degenerate or failed (see the README's table); only use the transform
 as an answer when it is ok.
 )doc")
-      .def_property_readonly("transform", [](const Registration& r) { return matrix_array(r.result.transform); },
-                             "4x4 float64: T* mapping source points into the target frame (identity unless ok/ambiguous).")
+      .def_property_readonly(
+          "transform",
+          [](const Registration& r) {
+            return matrix_array(between_cloud_frames(r.result.transform, r.source_origin, r.target_origin));
+          },
+          "4x4 float64: T* mapping source points into the target frame, the frames the clouds were given in "
+          "(identity unless ok/ambiguous).")
       .def_property_readonly("status", [](const Registration& r) { return registration_status_name(r.result.status); },
                              "ok, ambiguous, degenerate or failed.")
       .def_property_readonly("ok", [](const Registration& r) { return r.result.status == RegistrationStatus::Ok; },
@@ -98,15 +105,30 @@ as an answer when it is ok.
       [](const py::object& source_object, const py::object& target_object, const std::string& preset,
          const py::object& config, const py::object& refiner, const py::object& source_preset,
          const py::object& target_preset, const py::object& source_labels, const py::object& target_labels,
-         const py::object& ground_truth) {
+         const py::object& ground_truth, const py::object& source_origin, const py::object& target_origin) {
         using Clock = std::chrono::steady_clock;
+        auto registration = std::make_shared<Registration>();
+        registration->source_origin = point_from_object(source_origin, "source_origin");
+        registration->target_origin = point_from_object(target_origin, "target_origin");
+        // As `quadrix register --source-origin`: clouds in a map's frame are registered centred on
+        // their sensors; the ground truth is compared between the sensors' frames.
+        const bool centred = !registration->source_origin.isZero(0.0) || !registration->target_origin.isZero(0.0);
         std::optional<Eigen::Isometry3d> truth;
-        if (!ground_truth.is_none()) truth = pose_from_object(ground_truth, "ground_truth");
+        if (!ground_truth.is_none())
+          truth = between_sensor_frames(pose_from_object(ground_truth, "ground_truth"), registration->source_origin,
+                                        registration->target_origin);
         const Clock::time_point start = Clock::now();
         std::shared_ptr<Cloud> source_holder, target_holder;
         RegistrationReportContext context;
-        const PointCloud& source = cloud_from_object(source_object, "source", source_holder, &context.source_path);
-        const PointCloud& target = cloud_from_object(target_object, "target", target_holder, &context.target_path);
+        const PointCloud* source_given = &cloud_from_object(source_object, "source", source_holder, &context.source_path);
+        const PointCloud* target_given = &cloud_from_object(target_object, "target", target_holder, &context.target_path);
+        PointCloud source_centred, target_centred;
+        if (centred) {
+          source_centred = centred_on_sensor(*source_given, registration->source_origin);
+          target_centred = centred_on_sensor(*target_given, registration->target_origin);
+        }
+        const PointCloud& source = centred ? source_centred : *source_given;
+        const PointCloud& target = centred ? target_centred : *target_given;
         const std::vector<std::uint32_t> source_point_labels = labels_from_object(source_labels, source.size(), "source_labels");
         const std::vector<std::uint32_t> target_point_labels = labels_from_object(target_labels, target.size(), "target_labels");
         context.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
@@ -115,7 +137,6 @@ as an answer when it is ok.
         const RegistrationOptions options = registration_options_from(
             source_preset.is_none() ? preset : source_preset.cast<std::string>(), source,
             target_preset.is_none() ? preset : target_preset.cast<std::string>(), target, config, refiner, &notes);
-        auto registration = std::make_shared<Registration>();
         {
           py::gil_scoped_release release;
           registration->result = register_clouds(source, target, options, source_point_labels, target_point_labels);
@@ -125,6 +146,8 @@ as an answer when it is ok.
           context.preset_notes = notes;
           context.ground_truth = truth;
           context.overlap = registration->result.overlap;
+          context.source_sensor_origin = registration->source_origin;
+          context.target_sensor_origin = registration->target_origin;
           registration->json = registration_report_json(registration->result, context);
         }
         registration->report = json_loads(registration->json);
@@ -133,7 +156,8 @@ as an answer when it is ok.
       py::arg("source"), py::arg("target"), py::arg("preset") = "auto", py::arg("config") = py::none(),
       py::arg("refiner") = py::none(), py::kw_only(), py::arg("source_preset") = py::none(),
       py::arg("target_preset") = py::none(), py::arg("source_labels") = py::none(),
-      py::arg("target_labels") = py::none(), py::arg("ground_truth") = py::none(), R"doc(
+      py::arg("target_labels") = py::none(), py::arg("ground_truth") = py::none(), py::arg("source_origin") = py::none(),
+      py::arg("target_origin") = py::none(), R"doc(
 Registers ``source`` onto ``target`` globally with quadrics, as ``quadrix register`` does, and returns
 a quadrix.RegistrationResult (transform, status, message, timings_ms, counts, candidates, overlap:
 report.json's content).
@@ -149,6 +173,10 @@ source_preset, target_preset: per-side presets for cross-sensor pairs (keyword-o
 source_labels, target_labels: optional SemanticKITTI labels, one per point (as ``--labels-source``).
 ground_truth: optional 4x4 T_gt mapping source into target; the report then has ground_truth
     {rte_m, rre_deg, success} by the paper's rule (2 m, 5 deg), as ``--gt``.
+source_origin, target_origin: where each side's sensor stood in its cloud's frame, (x, y, z) in
+    metres (as ``--source-origin``; keyword-only); None: the origin. For clouds in a map's frame: they
+    are registered centred on their sensors, ``transform`` is between the frames given, and the
+    report's other transforms and the models are between the sensor-centred clouds.
 
 The GIL is released while the pipeline runs, so threads can register pairs concurrently.
 Raises FileNotFoundError for a missing file, ValueError naming the file for an unreadable one or a

@@ -107,6 +107,59 @@ def test_the_kitti_pair_thirty_metres_apart_is_found_by_the_ground_correlation(s
     assert best["start"].startswith("correlation"), best["start"]
 
 
+def map_pose(yaw_degrees, translation):
+    """A 4x4 pose: a turn about the up axis, then a translation."""
+    c, s = np.cos(np.radians(yaw_degrees)), np.sin(np.radians(yaw_degrees))
+    pose = np.eye(4)
+    pose[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+    pose[:3, 3] = translation
+    return pose
+
+
+def test_clouds_in_a_map_frame_register_with_their_sensor_origins(tmp_path, shared_data, quadrix_cli):
+    # A loop closure as a mapping system holds it: each scan in the map's frame, its sensor hundreds
+    # of metres from the map's origin, the two scans' poses in the map drifted apart.
+    truth_between_sensors = np.loadtxt(shared_data("kitti00/gt/T_004438_from_000000.txt")).reshape(4, 4)
+    source_pose, target_pose = map_pose(-70.0, [812.5, -340.0, 21.0]), map_pose(35.0, [806.0, -331.0, 20.5])
+    source_points = np.array(quadrix.read_cloud(str(shared_data("kitti00/velodyne/000000.bin"))).points, np.float64)
+    target_points = np.array(quadrix.read_cloud(str(shared_data("kitti00/velodyne/004438.ply"))).points, np.float64)
+    source = source_points @ source_pose[:3, :3].T + source_pose[:3, 3]
+    target = target_points @ target_pose[:3, :3].T + target_pose[:3, 3]
+    truth = target_pose @ truth_between_sensors @ np.linalg.inv(source_pose)
+    origins = dict(source_origin=source_pose[:3, 3], target_origin=target_pose[:3, 3])
+
+    result = quadrix.register(source, target, ground_truth=truth, **origins)
+    assert result.status == "ok", result.message
+    assert result.ground_truth["success"] is True and result.ground_truth["rte_m"] < 0.3
+    # The transform is between the frames given: the source sensor lands where the truth puts it.
+    sensor = np.append(source_pose[:3, 3], 1.0)
+    assert np.linalg.norm((result.transform @ sensor)[:3] - (truth @ sensor)[:3]) < 0.3
+    assert np.allclose(result.report["sensor_origins"]["transform_between_files"], result.transform)
+
+    # Without them every point lies beyond the sensor's range from the map's origin: a status that
+    # names the frame, not an answer.
+    unplaced = quadrix.register(source, target)
+    assert unplaced.status == "degenerate" and "sensor's frame" in unplaced.message
+
+    source_file, target_file, truth_file = tmp_path / "source.ply", tmp_path / "target.ply", tmp_path / "truth.txt"
+    quadrix.write_cloud(str(source_file), quadrix.Cloud(source.astype(np.float32)))
+    quadrix.write_cloud(str(target_file), quadrix.Cloud(target.astype(np.float32)))
+    np.savetxt(truth_file, truth)
+    printed = quadrix_cli("register", source_file, target_file, "--gt", truth_file, "--out", tmp_path / "out",
+                          "--source-origin", ",".join(map(str, origins["source_origin"])),
+                          "--target-origin", ",".join(map(str, origins["target_origin"])), "--no-page")
+    assert "SUCCESS" in printed
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert report["status"] == "ok" and report["ground_truth"]["success"] is True
+    between_files = np.array(report["sensor_origins"]["transform_between_files"])
+    assert np.linalg.norm((between_files @ sensor)[:3] - (truth @ sensor)[:3]) < 0.3
+    printed_matrix = np.array([[float(v) for v in line.split()] for line in printed.splitlines()[2:6]])
+    np.testing.assert_allclose(printed_matrix, between_files, atol=1e-5)
+    # merged.ply is in the target file's frame: the target's points come back unmoved.
+    merged = np.array(quadrix.read_cloud(str(tmp_path / "out" / "merged.ply")).points)
+    np.testing.assert_allclose(merged[: len(target)], target.astype(np.float32), atol=1e-3)
+
+
 def test_refiner_and_presets_are_checked():
     points = np.random.default_rng(1).uniform(-10, 10, (100, 3))
     with pytest.raises(ValueError, match="gauss"):

@@ -115,6 +115,34 @@ TEST(RegistrationErrors, TranslationAndRotationErrorsMatchTheirDefinitions) {
   EXPECT_NEAR(rotation_error_degrees(make_pose(30.0, {0, 0, 0}, 1e-6), make_pose(30.0, {0, 0, 0})), 1e-6, 1e-9);
 }
 
+TEST(RegistrationFrames, SensorCentredCloudsAndTheirTransformsMapBackToTheFilesFrames) {
+  PointCloud cloud;
+  cloud.positions = Eigen::Matrix3Xf::Random(3, 50) * 20.0F;
+  cloud.intensity.assign(50, 0.5F);
+  const Eigen::Vector3d source_origin(812.5, -340.25, 21.0);
+  const Eigen::Vector3d target_origin(-95.0, 1210.0, 3.5);
+  const PointCloud centred = centred_on_sensor(cloud, source_origin);
+  ASSERT_EQ(centred.size(), cloud.size());
+  EXPECT_EQ(centred.intensity, cloud.intensity);
+  for (std::size_t i = 0; i < cloud.size(); ++i) EXPECT_LT((centred.point(i) + source_origin - cloud.point(i)).norm(), 1e-4);
+  EXPECT_THROW(centred_on_sensor(cloud, Eigen::Vector3d(0.0, std::nan(""), 0.0)), Error);
+
+  // A point's image is the same whether it is mapped between the files' frames or between the
+  // sensor-centred ones; the two conversions undo each other.
+  const Eigen::Isometry3d between_sensors = make_pose(63.0, {4.0, -7.0, 0.3});
+  const Eigen::Isometry3d between_files = between_cloud_frames(between_sensors, source_origin, target_origin);
+  const Eigen::Vector3d point = cloud.point(7);
+  EXPECT_LT((between_files * point - (between_sensors * (point - source_origin) + target_origin)).norm(), 1e-9);
+  EXPECT_LT((between_sensor_frames(between_files, source_origin, target_origin).matrix() - between_sensors.matrix()).norm(), 1e-9);
+  // Far from the origin the files' frames magnify a rotation error into a translation error; the
+  // sensors' frames do not (the paper's RTE).
+  const Eigen::Isometry3d slightly_turned = make_pose(63.3, {4.0, -7.0, 0.3});
+  const Eigen::Isometry3d turned_files = between_cloud_frames(slightly_turned, source_origin, target_origin);
+  EXPECT_GT(translation_error(turned_files, between_files), 2.0);
+  EXPECT_LT(translation_error(between_sensor_frames(turned_files, source_origin, target_origin),
+                              between_sensor_frames(between_files, source_origin, target_origin)), 1e-9);
+}
+
 TEST(RegisterClouds, RecoversTheKnownTransformOfSyntheticStreetPairs) {
   int successes = 0;
   const int rounds = 3;
