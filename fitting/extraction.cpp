@@ -397,7 +397,8 @@ void describe_extraction(ExtractionResult& result, std::size_t points_in_range) 
 
 // Why nothing is in range, with the nearest and farthest point's distance from the sensor: a cloud
 // whose points all lie beyond the maximum range is most often in another frame than its sensor's
-// (a map's), where the range limits measure from a point the sensor never stood at.
+// (a map's), where the range limits measure from a point the sensor never stood at, or in
+// millimetres.
 std::string no_point_in_range_message(const Eigen::Matrix3Xd& points, const ExtractionOptions& options) {
   double nearest = std::numeric_limits<double>::infinity();
   double farthest = 0.0;
@@ -414,7 +415,7 @@ std::string no_point_in_range_message(const Eigen::Matrix3Xd& points, const Extr
           << options.sensor_origin.z() << "))";
   if (std::isfinite(nearest)) message << "; the points lie " << nearest << " to " << farthest << " m from it";
   if (std::isfinite(nearest) && options.maximum_range > 0.0 && nearest > options.maximum_range)
-    message << ": is the cloud in its sensor's frame, with the sensor at the origin?";
+    message << ": is the cloud in metres, and in its sensor's frame with the sensor at the origin?";
   return message.str();
 }
 

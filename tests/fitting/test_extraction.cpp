@@ -644,6 +644,17 @@ TEST(Extraction, DegenerateCloudsGiveAStatusNotACrash) {
   std::mt19937_64 engine(3);
   std::uniform_real_distribution<float> unit(-30.0f, 30.0f);
   for (int i = 0; i < 5000; ++i) flat.positions.col(i) = Eigen::Vector3f(unit(engine), unit(engine), -1.73f);
+
+  // The same ground placed 500 m from the origin (a map's frame): nothing in range, and the message
+  // says how far the points lie from the sensor the range limits assume.
+  PointCloud placed = flat;
+  placed.positions.row(0).array() += 500.0f;
+  const ExtractionResult out_of_range = extract_elements(placed, extraction_preset("vlp64"));
+  EXPECT_EQ(out_of_range.status, ExtractionStatus::EmptyCloud);
+  EXPECT_NE(out_of_range.message.find("no point within the range limits (2 to 80 m"), std::string::npos) << out_of_range.message;
+  EXPECT_NE(out_of_range.message.find("the points lie 4"), std::string::npos) << out_of_range.message;
+  EXPECT_NE(out_of_range.message.find("in its sensor's frame"), std::string::npos) << out_of_range.message;
+
   const ExtractionResult ground_only = extract_elements(flat, extraction_preset("vlp64"));
   EXPECT_EQ(ground_only.status, ExtractionStatus::Ok);
   ASSERT_EQ(ground_only.elements.size(), 1u);
