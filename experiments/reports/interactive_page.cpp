@@ -390,9 +390,18 @@ RegistrationPageInput read_registration_folder(const std::string& directory) {
   input.source.positions.resize(3, static_cast<Eigen::Index>(source_count));
   input.target.positions.resize(3, static_cast<Eigen::Index>(merged.size() - source_count));
   const Eigen::Isometry3d back = transform.inverse();
+  // With sensor origins, merged.ply is in the target file's frame and everything else of the folder
+  // between the sensor-centred clouds: the merged points are moved there.
+  Eigen::Vector3f target_origin = Eigen::Vector3f::Zero();
+  if (report.contains("sensor_origins")) {
+    const json& origin = require(require(report, "sensor_origins", report_path), "target", report_path);
+    if (!origin.is_array() || origin.size() != 3 || !origin[0].is_number() || !origin[1].is_number() || !origin[2].is_number())
+      throw file_error(report_path, "\"sensor_origins\".\"target\": expected three numbers");
+    target_origin = Eigen::Vector3f(origin[0].get<float>(), origin[1].get<float>(), origin[2].get<float>());
+  }
   Eigen::Index s = 0, t = 0;
   for (std::size_t i = 0; i < merged.size(); ++i) {
-    const Eigen::Vector3f p = merged.positions.col(static_cast<Eigen::Index>(i));
+    const Eigen::Vector3f p = merged.positions.col(static_cast<Eigen::Index>(i)) - target_origin;
     if (merged.labels[i] == 1)
       input.source.positions.col(s++) = (back * p.cast<double>()).cast<float>();
     else

@@ -4,6 +4,8 @@
 // statistics of a screenshot, decoded with stb_image), show the status in the side panel and report
 // the time its first frame was drawn (data-ready-ms, logged). Skips when chromium is not installed.
 #include "experiments/reports/interactive_page.h"
+#include "experiments/reports/registration_report.h"
+#include "geometry/io.h"
 #include "geometry/error.h"
 
 #include <gtest/gtest.h>
@@ -244,6 +246,30 @@ TEST(InteractivePageInput, ViewRejectsAnInputItCannotShow) {
   EXPECT_NE(run(std::string(QUADRIX_EXECUTABLE) + " view '" + directory.string() + "' --out '" + (directory / "x.html").string() + "'", log), 0);
   EXPECT_NE(read_text(log).find("expected a `quadrix register --out` folder"), std::string::npos) << read_text(log);
   EXPECT_FALSE(fs::exists(directory / "x.html"));
+  fs::remove_all(directory);
+}
+
+TEST(InteractivePageInput, ARegisterFolderWithSensorOriginsIsShownSensorCentred) {
+  // What `quadrix register --source-origin --target-origin --out` writes: merged.ply in the target
+  // file's frame, report.json's transform between the sensor-centred clouds.
+  const fs::path directory = fresh_directory("origins");
+  PointCloud source, target;
+  source.positions = Eigen::Matrix3Xf::Random(3, 40) * 10.0F;
+  target.positions = Eigen::Matrix3Xf::Random(3, 30) * 10.0F;
+  RegistrationResult result;
+  result.transform = Eigen::Translation3d(2.0, -1.0, 0.5) * Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ());
+  RegistrationReportContext context;
+  context.source_sensor_origin = Eigen::Vector3d(800.0, 300.0, 20.0);
+  context.target_sensor_origin = Eigen::Vector3d(806.0, 291.0, 20.5);
+  write_registration_report((directory / "report.json").string(), result, context);
+  write_point_cloud((directory / "merged.ply").string(),
+                    centred_on_sensor(merge_aligned_clouds(source, target, result.transform), -context.target_sensor_origin));
+
+  const RegistrationPageInput page = read_registration_folder(directory.string());
+  ASSERT_EQ(page.source.size(), source.size());
+  ASSERT_EQ(page.target.size(), target.size());
+  for (std::size_t i = 0; i < target.size(); ++i) EXPECT_LT((page.target.point(i) - target.point(i)).norm(), 1e-3) << i;
+  for (std::size_t i = 0; i < source.size(); ++i) EXPECT_LT((page.source.point(i) - source.point(i)).norm(), 1e-3) << i;
   fs::remove_all(directory);
 }
 
