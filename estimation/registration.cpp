@@ -110,7 +110,8 @@ RegistrationStatus decide_registration_status(const RegistrationFindings& findin
   const bool sure = findings.settled_by_dense_search || (!findings.scores_close && !findings.weak_support);
   const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little && !findings.half_turn_rival &&
                     !findings.half_turn_unclear && !findings.dense_search_unclear &&
-                    !findings.overlap_unconfirmed && !findings.in_free_space && !findings.free_space_unjudged;
+                    !findings.overlap_unconfirmed && !findings.in_free_space && !findings.free_space_unjudged &&
+                    !findings.grounds_disagree;
   return sure && fits ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
 }
 
@@ -797,6 +798,34 @@ void check_free_space(RegistrationResult& result, const PointCloud& source, cons
 
 namespace {
 
+// The angle between two axes, degrees, whichever way each points.
+double angle_between_axes_degrees(const Eigen::Vector3d& first, const Eigen::Vector3d& second) {
+  return std::acos(std::min(1.0, std::abs(first.normalized().dot(second.normalized())))) * 180.0 / kPi;
+}
+
+}  // namespace
+
+void check_ground_agreement(RegistrationResult& result, const RegistrationOptions& options) {
+  const double limit = options.ambiguity.ground_tilt_limit_degrees;
+  if (result.status != RegistrationStatus::Ok || limit < 0.0) return;
+  const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
+  if (!source_ground || !target_ground) return;
+  const Eigen::Vector3d source_normal = source_ground->head<3>(), target_normal = target_ground->head<3>();
+  if (angle_between_axes_degrees(source_normal, options.source_extraction.up) > kLevelGroundDegrees ||
+      angle_between_axes_degrees(target_normal, options.target_extraction.up) > kLevelGroundDegrees)
+    return;
+  const double tilt = angle_between_axes_degrees(result.transform.linear() * source_normal, target_normal);
+  result.findings.grounds_disagree = tilt > limit;
+  if (!result.findings.grounds_disagree) return;
+  std::ostringstream why;
+  why.precision(3);
+  why << "; the answer tilts the source's ground " << tilt << " deg from the target's (limit " << limit << "): not sure";
+  result.message += why.str();
+  decide(result);
+}
+
+namespace {
+
 // What every check of an answer measures, prepared before the answer is known: it depends on the
 // clouds and the options only (prepare_checks).
 struct CheckInputs {
@@ -984,11 +1013,13 @@ bool check_answer(RegistrationResult& result, const CheckInputs& inputs, const R
 }
 
 // verify_registration on inputs prepare_checks made for these clouds and options: the checks, then
-// the free-space check on the answer they leave (unless it judged that answer already).
+// the free-space check on the answer they leave (unless it judged that answer already), then the
+// grounds' agreement.
 void verify_prepared(RegistrationResult& result, const CheckInputs& inputs, const RegistrationOptions& options) {
   const bool judged = check_answer(result, inputs, options);
   if (!judged && inputs.source_image && inputs.target_image)
     check_free_space(result, inputs.source, inputs.target, *inputs.source_image, *inputs.target_image, options.ambiguity);
+  check_ground_agreement(result, options);
 }
 
 }  // namespace

@@ -82,6 +82,7 @@ struct AmbiguityOptions {
   double half_turn_correlation_reach = 40.0;     ///< those translations are searched this far, m, along the ground from the turned answer's: a street's mirror image can lie anywhere along it
   double free_space_limit = 0.18;             ///< an `ok` answer may put at most this share of each scan's high points in the other sensor's free space, the two shares summed (check_free_space), else `ambiguous` (the answer is kept; negative: no check). The clouds must be in their sensors' frames (ExtractionOptions::sensor_origin); the monument preset, whose stations are merged, turns it off. The middle of the gap on the simulated tuning sets (seeds 1001-1005: HDL-64E as drawn and under random yaw, VLP-16, Livox with both passes one way: 1,200 runs, with the other `ok` margins at their defaults), where the 931 right `ok` answers summed at most 0.100 and the 41 wrong ones at least 0.254 (docs/registration.md, "Free space")
   bool free_space_screens_optima = true;       ///< the dense search and the half-turn check leave out of their best and their rivals every refined optimum the free-space check would demote (more than free_space_limit, judged on 100 points a side or more): on the tuning sets this took VLP-16 success from 210 to 263 of 300 and Livox (both passes one way) from 213 to 237, `ok` and wrong still none (docs/registration.md, "Free space")
+  double ground_tilt_limit_degrees = 3.5;     ///< an `ok` answer may turn the source's ground at most this far from the target's (the angle between the moved source ground normal and the target's), else `ambiguous`, kept (negative: no check; check_ground_agreement). Under the truth the two grounds agree within 1.76 deg on the tuning sets (1,115 pairs: HDL-64E, VLP-16, Livox driven one way, HDL-64E onto VLP-16); the one `ok` and wrong answer there, an HDL-64E scan onto a VLP-16 one, tilted them 5.47 deg; 3.5 is the middle of that gap
   double free_space_height = 2.0;             ///< the free-space check tests points standing more than this above their scan's ground, m: cars and people that moved between the scans stand lower (at 0.5 m, right answers of the HDL-64E tuning set summed up to 0.63, parked cars that differ between the passes)
 };
 
@@ -151,6 +152,7 @@ struct RegistrationFindings {
   bool replaced_by_half_turn = false;     ///< the half-turned rival fitted clearly better and became the answer (check_half_turn)
   bool in_free_space = false;             ///< the answer puts more points in the other sensor's free space than AmbiguityOptions::free_space_limit (check_free_space)
   bool free_space_unjudged = false;       ///< the free-space check could not judge the answer (no ground in a model, or fewer than 100 points tested a side), so it is not vouched for (check_free_space)
+  bool grounds_disagree = false;          ///< the answer tilts the source's ground from the target's by more than AmbiguityOptions::ground_tilt_limit_degrees (check_ground_agreement)
 };
 
 /// The half-turn check of an answer (check_half_turn): how well the answer and its mirror image fit.
@@ -289,6 +291,20 @@ void check_half_turn(RegistrationResult& result, const PointCloud& source, const
 /// Adds the "free_space" timing; verify_registration calls it last.
 void check_free_space(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                       const RangeImage& source_image, const RangeImage& target_image, const AmbiguityOptions& options);
+
+/// A ground whose normal lies within this of its extraction's up axis is level enough for
+/// check_ground_agreement, degrees. The grounds of the tuning sets lie within 0.6 deg of the up axis
+/// `auto` measured; a 3DTK scan's ground region, a ramp, 8.9 deg off it.
+inline constexpr double kLevelGroundDegrees = 3.0;
+
+/// Checks that an `ok` answer lays the source's ground on the target's (beyond the paper): both
+/// scanners stood on the same ground, so under the truth two level grounds agree. An answer that
+/// turns them apart by more than `options.ambiguity.ground_tilt_limit_degrees` is tilted, and
+/// `ambiguous` (findings.grounds_disagree); it is kept. Runs only on an `ok` answer whose two models
+/// both have a ground within kLevelGroundDegrees of their extraction's up axis: a ground region that
+/// is a ramp or a bank (a 3DTK scan's leans 9 deg off its up axis) says nothing about the tilt.
+/// verify_registration calls it after check_free_space.
+void check_ground_agreement(RegistrationResult& result, const RegistrationOptions& options);
 
 /// Verification after selection (register_clouds and the benchmark): crops both clouds to their
 /// extraction's range limits around the sensor (the platform's own hits are not scene), leaves out

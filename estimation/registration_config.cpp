@@ -172,6 +172,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::ambiguity, &AmbiguityOptions::free_space_limit>("ambiguity.free_space_limit", "an ok answer may put at most this share of each scan's high points in the other sensor's free space, both shares summed, else ambiguous (the answer is kept; negative: no check; clouds in their sensors' frames)"),
       shared_key<&R::ambiguity, &AmbiguityOptions::free_space_screens_optima>("ambiguity.free_space_screens_optima", "the dense search and the half-turn check leave out of their best and their rivals every refined optimum the free-space check would demote"),
       shared_key<&R::ambiguity, &AmbiguityOptions::free_space_height>("ambiguity.free_space_height", "the free-space check tests points standing more than this above their scan's ground, m (>= 0)"),
+      shared_key<&R::ambiguity, &AmbiguityOptions::ground_tilt_limit_degrees>("ambiguity.ground_tilt_limit_deg", "an ok answer may turn the source's ground at most this far from the target's, else ambiguous (the answer is kept; negative: no check), degrees"),
       // dense_search
       shared_key<&R::dense_search, &DenseSearchOptions::enabled>("dense_search.enabled", "settle ambiguous answers with the dense search along the weakest direction"),
       shared_key<&R::dense_search, &DenseSearchOptions::voxel_size>("dense_search.voxel_size", "both clouds thinned to one point per cube of this edge, m (> 0)"),
@@ -453,6 +454,9 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
       if (extraction->isolation_neighbours < 1)
         throw Error("extraction.isolation_neighbours must be at least 1, got " + std::to_string(extraction->isolation_neighbours));
     }
+    if (!std::isfinite(options.ambiguity.ground_tilt_limit_degrees))
+      throw Error("ambiguity.ground_tilt_limit_deg must be a finite angle in degrees (negative: no check), got " +
+                  std::to_string(options.ambiguity.ground_tilt_limit_degrees));
     if (!(options.ambiguity.free_space_height >= 0.0 && std::isfinite(options.ambiguity.free_space_height)))
       throw Error("ambiguity.free_space_height must be a height >= 0 in metres, got " + std::to_string(options.ambiguity.free_space_height));
     if (!(options.ambiguity.confirm_below >= 0.0 && options.ambiguity.confirm_below <= 1.0))

@@ -29,6 +29,7 @@ struct SynthCommandOptions {
   std::optional<double> dropout;       ///< dropout probability override
   std::string foliage = "solid";       ///< street vegetation: solid or porous (crowns and hedges)
   std::string second_pass = "opposite";  ///< loop-closures: the second drive's direction, opposite or same
+  std::string source_sensor;           ///< loop-closures: the second pass's sensor (the sources'), for a cross-sensor set
   bool list = false;                   ///< list scenes and sensors, then exit
   LoopClosureSetOptions loop_set;      ///< loop-closures only: streets, pairs per bin, scan spacing
 };
@@ -75,6 +76,11 @@ void run_command(const SynthCommandOptions& options) {
       throw Error("--second-pass: expected opposite or same, got '" + options.second_pass + "'");
     loop_set.same_direction = options.second_pass == "same";
     loop_set.sensor = sensor;
+    if (!options.source_sensor.empty()) {
+      loop_set.source_sensor = sensor_preset(options.source_sensor);
+      if (options.noise) loop_set.source_sensor->range_noise_sigma = *options.noise;
+      if (options.dropout) loop_set.source_sensor->dropout_probability = *options.dropout;
+    }
     const auto start = std::chrono::steady_clock::now();
     const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(options.out, loop_set);
     std::map<std::string, int> per_bin;
@@ -87,6 +93,7 @@ void run_command(const SynthCommandOptions& options) {
     return;
   }
   if (options.second_pass != "opposite") throw Error("--second-pass applies to loop-closures only");
+  if (!options.source_sensor.empty()) throw Error("--source-sensor applies to loop-closures only");
   SyntheticOutputOptions output;
   if (options.format == "ply") {
     output.cloud_format = CloudFormat::Ply;
@@ -150,6 +157,9 @@ const CommandRegistration registration(20, [](CLI::App& app) {
                       "loop-closures: the second drive goes the opposite way or the same way (forward-looking sensors such as "
                       "the Livox share no view with an opposite pass)")
       ->capture_default_str();
+  command->add_option("--source-sensor", options->source_sensor,
+                      "loop-closures: scan the second pass (the pairs' sources) with this sensor and the first with --sensor: "
+                      "a cross-sensor set (default: --sensor for both)");
   command->callback([options] { run_command(*options); });
 });
 

@@ -48,6 +48,8 @@ void write_used_scans(const std::filesystem::path& root, const std::string& fold
 std::vector<LoopClosureSetPair> write_loop_closure_set(const std::string& directory, const LoopClosureSetOptions& options) {
   check_options(options);
   const SensorModel& sensor = options.sensor;
+  const SensorModel& source_sensor = options.source_sensor ? *options.source_sensor : sensor;
+  const std::string sensor_column = options.source_sensor ? source_sensor.name + "->" + sensor.name : sensor.name;
   const std::filesystem::path root(directory);
   std::filesystem::create_directories(root);
   std::vector<LoopClosureSetPair> pairs;
@@ -59,7 +61,7 @@ std::vector<LoopClosureSetPair> write_loop_closure_set(const std::string& direct
     const StreetPass second = make_street_pass(seed, options.same_direction ? 3 : 2, options.scan_spacing, options.street);
     // Each pass is its own drive: its own noise and dropout stream.
     const SyntheticRun first_run = run_synthetic(first.scene, sensor, first.poses, seed * 2 + 1);
-    const SyntheticRun second_run = run_synthetic(second.scene, sensor, second.poses, seed * 2 + 2);
+    const SyntheticRun second_run = run_synthetic(second.scene, source_sensor, second.poses, seed * 2 + 2);
     const std::string target_folder = street_folder + "/pass_1";
     const std::string source_folder = street_folder + "/pass_2";
     std::vector<bool> target_used(first.poses.size(), false), source_used(second.poses.size(), false);
@@ -99,7 +101,7 @@ std::vector<LoopClosureSetPair> write_loop_closure_set(const std::string& direct
   write_file_atomically((root / "pairs.tsv").string(), [&](std::ostream& out) {
     out << "id\tsource\ttarget\tgt\tgt_quality\tsensor\tkind\tt_m\trot_deg\n";
     for (const LoopClosureSetPair& pair : pairs)
-      out << pair.id << '\t' << pair.source << '\t' << pair.target << '\t' << pair.truth << "\texact\t" << sensor.name
+      out << pair.id << '\t' << pair.source << '\t' << pair.target << '\t' << pair.truth << "\texact\t" << sensor_column
           << '\t' << pair.bin << '\t' << decimal_text(pair.distance, 2) << '\t' << decimal_text(pair.rotation, 1) << '\n';
   });
   return pairs;

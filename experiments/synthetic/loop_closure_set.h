@@ -9,6 +9,7 @@
 #include "experiments/synthetic/synthetic_scene.h"
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,7 +20,8 @@ namespace quadrix {
 struct LoopClosureSetOptions {
   std::uint64_t first_seed = 1;     ///< street layouts first_seed, first_seed + 1, ... (make_street_scene seeds)
   int streets = 6;                  ///< how many street layouts
-  SensorModel sensor = sensor_preset("hdl64");  ///< the sensor of every scan (its name goes to pairs.tsv)
+  SensorModel sensor = sensor_preset("hdl64");  ///< the sensor of every scan (its name goes to pairs.tsv), or of the first pass's (the targets') when source_sensor is set
+  std::optional<SensorModel> source_sensor;     ///< the second pass's sensor (the sources'), for a cross-sensor set; pairs.tsv then names "source->target"
   double scan_spacing = 3.0;        ///< metres between consecutive scans of a pass
   int pairs_per_bin = 20;           ///< pairs drawn per street and bin (fewer when a bin has fewer)
   std::vector<std::pair<double, double>> bins{{0.0, 10.0}, {10.0, 20.0}, {20.0, 30.0}};  ///< [min, max) distance bins, m

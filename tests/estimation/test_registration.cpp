@@ -143,6 +143,42 @@ TEST(RegistrationFrames, SensorCentredCloudsAndTheirTransformsMapBackToTheFilesF
                               between_sensor_frames(between_files, source_origin, target_origin)), 1e-9);
 }
 
+TEST(VerifyRegistration, AnOkAnswerThatTiltsOneLevelGroundOffTheOtherIsAmbiguous) {
+  // Both scanners on a flat ground 1.73 m below them; answers that turn the source by a yaw and a tilt.
+  const auto answered = [](double tilt_degrees, const Eigen::Vector3d& source_normal) {
+    RegistrationResult result;
+    result.status = RegistrationStatus::Ok;
+    result.source_model.has_ground = result.target_model.has_ground = true;
+    result.source_model.ground_normal = source_normal.normalized();
+    result.source_model.ground_offset = 1.73;
+    result.target_model.ground_normal = Eigen::Vector3d::UnitZ();
+    result.target_model.ground_offset = 1.73;
+    result.transform = make_pose(40.0, {3.0, 1.0, 0.0}, tilt_degrees);
+    return result;
+  };
+  const RegistrationOptions options;  // up axes +z, limit 3.5 deg
+  RegistrationResult tilted = answered(5.0, Eigen::Vector3d::UnitZ());
+  check_ground_agreement(tilted, options);
+  EXPECT_EQ(tilted.status, RegistrationStatus::Ambiguous);
+  EXPECT_TRUE(tilted.findings.grounds_disagree);
+  EXPECT_NE(tilted.message.find("tilts the source's ground 5 deg"), std::string::npos) << tilted.message;
+
+  RegistrationResult level = answered(2.0, Eigen::Vector3d::UnitZ());
+  check_ground_agreement(level, options);
+  EXPECT_EQ(level.status, RegistrationStatus::Ok) << level.message;
+
+  // A ground region 9 deg off its scan's up axis (a ramp) judges nothing.
+  RegistrationResult ramp = answered(5.0, Eigen::Vector3d(0.0, std::sin(9.0 * kPi / 180.0), std::cos(9.0 * kPi / 180.0)));
+  check_ground_agreement(ramp, options);
+  EXPECT_EQ(ramp.status, RegistrationStatus::Ok) << ramp.message;
+
+  RegistrationOptions off = options;
+  off.ambiguity.ground_tilt_limit_degrees = -1.0;
+  RegistrationResult unchecked = answered(5.0, Eigen::Vector3d::UnitZ());
+  check_ground_agreement(unchecked, off);
+  EXPECT_EQ(unchecked.status, RegistrationStatus::Ok);
+}
+
 TEST(RegisterClouds, RecoversTheKnownTransformOfSyntheticStreetPairs) {
   int successes = 0;
   const int rounds = 3;
