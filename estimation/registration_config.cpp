@@ -454,9 +454,6 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
       if (extraction->isolation_neighbours < 1)
         throw Error("extraction.isolation_neighbours must be at least 1, got " + std::to_string(extraction->isolation_neighbours));
     }
-    if (!std::isfinite(options.ambiguity.ground_tilt_limit_degrees))
-      throw Error("ambiguity.ground_tilt_limit_deg must be a finite angle in degrees (negative: no check), got " +
-                  std::to_string(options.ambiguity.ground_tilt_limit_degrees));
     if (!(options.ambiguity.free_space_height >= 0.0 && std::isfinite(options.ambiguity.free_space_height)))
       throw Error("ambiguity.free_space_height must be a height >= 0 in metres, got " + std::to_string(options.ambiguity.free_space_height));
     if (!(options.ambiguity.confirm_below >= 0.0 && options.ambiguity.confirm_below <= 1.0))

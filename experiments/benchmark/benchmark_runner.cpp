@@ -255,6 +255,7 @@ BenchMethodOutput run_quadrix(RunContext& context, const BenchMethodInput& input
   // perturbation's origin: its range crop in the verification follows it.
   RegistrationOptions pipeline = registration;
   pipeline.source_extraction.sensor_origin = source_extraction.sensor_origin;
+  pipeline.source_extraction.up = source_extraction.up;  // the ground agreement judges the turned scan's ground against it
   const std::string& ablation = context.options->ablation;
   const RegistrationResult result = register_modelled_clouds(
       {input.source, &source_model.modelling, source_model.modelling_ms, true},

@@ -235,7 +235,7 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("no_neighbours.yaml", "extraction:\n  isolation_neighbours: 0\n", "extraction.isolation_neighbours must be at least 1");
   expect_error_naming("no_check_neighbours.yaml", "ambiguity:\n  isolation_neighbours: 0\n", "ambiguity.isolation_neighbours must be at least 1");
   expect_error_naming("low_free_space.yaml", "ambiguity:\n  free_space_height: -1\n", "ambiguity.free_space_height must be a height >= 0");
-  expect_error_naming("nan_ground_tilt.yaml", "ambiguity:\n  ground_tilt_limit_deg: .nan\n", "ambiguity.ground_tilt_limit_deg must be a finite angle");
+  expect_error_naming("nan_ground_tilt.yaml", "ambiguity:\n  ground_tilt_limit_deg: .nan\n", "ambiguity.ground_tilt_limit_deg' must be a finite number");
   expect_error_naming("nan_free_space.yaml", "ambiguity:\n  free_space_limit: .nan\n", "key 'ambiguity.free_space_limit' must be a finite number");
   expect_error_naming("gain_above_one.yaml", "ambiguity:\n  confirm_over_identity: 1.5\n", "ambiguity.confirm_over_identity must be a fraction in [0, 1]");
   RegistrationOptions ignored;
