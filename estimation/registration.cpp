@@ -70,6 +70,7 @@ const char* registration_status_name(RegistrationStatus status) {
 
 PointCloud centred_on_sensor(PointCloud cloud, const Eigen::Vector3d& sensor_origin) {
   if (!sensor_origin.allFinite()) throw Error("the sensor origin must be finite");
+  if (sensor_origin.isZero(0.0)) return cloud;  // already there
   for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i)
     cloud.positions.col(i) = (cloud.positions.col(i).cast<double>() - sensor_origin).cast<float>();
   return cloud;

@@ -56,18 +56,13 @@ void run(const RegisterCommandOptions& options) {
   const Eigen::Vector3d target_origin(options.target_origin.data());
   if (!source_origin.allFinite()) throw Error("--source-origin: expected three finite numbers X,Y,Z in metres");
   if (!target_origin.allFinite()) throw Error("--target-origin: expected three finite numbers X,Y,Z in metres");
-  const bool centred = !source_origin.isZero(0.0) || !target_origin.isZero(0.0);
   std::optional<Eigen::Isometry3d> ground_truth;
   if (!options.ground_truth.empty())
     ground_truth = between_sensor_frames(read_pose_matrix(options.ground_truth), source_origin, target_origin);
 
   const Clock::time_point start = Clock::now();
-  PointCloud source = read_point_cloud(options.source);
-  PointCloud target = read_point_cloud(options.target);
-  if (centred) {
-    source = centred_on_sensor(std::move(source), source_origin);
-    target = centred_on_sensor(std::move(target), target_origin);
-  }
+  const PointCloud source = centred_on_sensor(read_point_cloud(options.source), source_origin);
+  const PointCloud target = centred_on_sensor(read_point_cloud(options.target), target_origin);
   std::vector<std::uint32_t> source_labels;
   std::vector<std::uint32_t> target_labels;
   if (!options.labels_source.empty()) source_labels = read_semantic_kitti_labels(options.labels_source, source.size());

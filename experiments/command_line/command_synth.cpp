@@ -49,14 +49,9 @@ void print_listing() {
   }
 }
 
-void run_command(const SynthCommandOptions& options) {
-  if (options.list) {
-    print_listing();
-    return;
-  }
-  if (options.scene.empty()) throw Error("synth: SCENE is required (one of street, corridor, monument; see --list)");
-  if (options.out.empty()) throw Error("synth: --out DIR is required");
-  SensorModel sensor = sensor_preset(options.sensor);
+// The sensor preset `name` with --noise and --dropout applied (checked first).
+SensorModel sensor_with_overrides(const std::string& name, const SynthCommandOptions& options) {
+  SensorModel sensor = sensor_preset(name);
   if (options.noise) {
     if (!(*options.noise >= 0.0)) throw Error("--noise: expected a range noise sigma >= 0 in metres");
     sensor.range_noise_sigma = *options.noise;
@@ -65,6 +60,17 @@ void run_command(const SynthCommandOptions& options) {
     if (!(*options.dropout >= 0.0 && *options.dropout < 1.0)) throw Error("--dropout: expected a probability in [0, 1)");
     sensor.dropout_probability = *options.dropout;
   }
+  return sensor;
+}
+
+void run_command(const SynthCommandOptions& options) {
+  if (options.list) {
+    print_listing();
+    return;
+  }
+  if (options.scene.empty()) throw Error("synth: SCENE is required (one of street, corridor, monument; see --list)");
+  if (options.out.empty()) throw Error("synth: --out DIR is required");
+  const SensorModel sensor = sensor_with_overrides(options.sensor, options);
   if (options.scene == "loop-closures") {
     // The set places its own scans and writes binary PLY: options that would be ignored are refused.
     if (!options.poses.empty()) throw Error("synth loop-closures: --poses does not apply (each pass places its own scans)");
@@ -76,11 +82,7 @@ void run_command(const SynthCommandOptions& options) {
       throw Error("--second-pass: expected opposite or same, got '" + options.second_pass + "'");
     loop_set.same_direction = options.second_pass == "same";
     loop_set.sensor = sensor;
-    if (!options.source_sensor.empty()) {
-      loop_set.source_sensor = sensor_preset(options.source_sensor);
-      if (options.noise) loop_set.source_sensor->range_noise_sigma = *options.noise;
-      if (options.dropout) loop_set.source_sensor->dropout_probability = *options.dropout;
-    }
+    if (!options.source_sensor.empty()) loop_set.source_sensor = sensor_with_overrides(options.source_sensor, options);
     const auto start = std::chrono::steady_clock::now();
     const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(options.out, loop_set);
     std::map<std::string, int> per_bin;

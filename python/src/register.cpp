@@ -120,15 +120,16 @@ as an answer when it is ok.
         const Clock::time_point start = Clock::now();
         std::shared_ptr<Cloud> source_holder, target_holder;
         RegistrationReportContext context;
-        const PointCloud* source_given = &cloud_from_object(source_object, "source", source_holder, &context.source_path);
-        const PointCloud* target_given = &cloud_from_object(target_object, "target", target_holder, &context.target_path);
+        const PointCloud& source_given = cloud_from_object(source_object, "source", source_holder, &context.source_path);
+        const PointCloud& target_given = cloud_from_object(target_object, "target", target_holder, &context.target_path);
+        // A cloud given as a quadrix.Cloud is used in place: it is copied only to be moved.
         PointCloud source_centred, target_centred;
         if (centred) {
-          source_centred = centred_on_sensor(*source_given, registration->source_origin);
-          target_centred = centred_on_sensor(*target_given, registration->target_origin);
+          source_centred = centred_on_sensor(source_given, registration->source_origin);
+          target_centred = centred_on_sensor(target_given, registration->target_origin);
         }
-        const PointCloud& source = centred ? source_centred : *source_given;
-        const PointCloud& target = centred ? target_centred : *target_given;
+        const PointCloud& source = centred ? source_centred : source_given;
+        const PointCloud& target = centred ? target_centred : target_given;
         const std::vector<std::uint32_t> source_point_labels = labels_from_object(source_labels, source.size(), "source_labels");
         const std::vector<std::uint32_t> target_point_labels = labels_from_object(target_labels, target.size(), "target_labels");
         context.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
