@@ -86,7 +86,8 @@ void quadric_distance_with_jacobian(const QuadricFactor& factor, const Eigen::Is
   jacobian->block<3, 3>(9, 3) = masked_target_frame * rotation;
 }
 
-QuadricFactor make_ground_factor(const GroundPlane& source_ground, const GroundPlane& target_ground, double weight) {
+QuadricFactor make_ground_factor(const GroundPlane& source_ground, const GroundPlane& target_ground, double weight,
+                                 double tilt_lever_arm) {
   const auto check = [](const GroundPlane& plane, const char* which) {
     if (!all_finite(plane.normal) || !std::isfinite(plane.offset) || plane.normal.norm() <= 0.0)
       throw Error(std::string("make_ground_factor: ") + which + " ground normal must be finite and non-zero");
@@ -94,6 +95,8 @@ QuadricFactor make_ground_factor(const GroundPlane& source_ground, const GroundP
   check(source_ground, "source");
   check(target_ground, "target");
   if (!(weight >= 0.0) || !std::isfinite(weight)) throw Error("make_ground_factor: weight must be finite and >= 0");
+  if (!(tilt_lever_arm > 0.0) || !std::isfinite(tilt_lever_arm))
+    throw Error("make_ground_factor: tilt lever arm must be finite and > 0");
   const double source_norm = source_ground.normal.norm();
   const double target_norm = target_ground.normal.norm();
   const Eigen::Vector3d source_normal = source_ground.normal / source_norm;
@@ -103,8 +106,8 @@ QuadricFactor make_ground_factor(const GroundPlane& source_ground, const GroundP
   factor.source_center = -(source_ground.offset / source_norm) * source_normal;
   factor.target_axes = basis_with_first_axis(target_normal);
   factor.target_center = -(target_ground.offset / target_norm) * target_normal;
-  factor.rotation_mask = Eigen::Vector3d(1.0, 0.0, 0.0);     // plane: I_R = [1, 0, 0]
-  factor.translation_mask = Eigen::Vector3d(1.0, 0.0, 0.0);  // plane: I_t = [1, 0, 0]
+  factor.rotation_mask = Eigen::Vector3d(tilt_lever_arm, 0.0, 0.0);  // plane: I_R = [1, 0, 0], scaled
+  factor.translation_mask = Eigen::Vector3d(1.0, 0.0, 0.0);           // plane: I_t = [1, 0, 0]
   factor.weight = weight;
   factor.kind = FactorKind::Ground;
   return factor;
@@ -199,7 +202,8 @@ FactorSet build_quadric_factors(const std::vector<QuadricRecord>& source, const 
     }
   }
   if (options.source_ground && options.target_ground)
-    result.factors.push_back(make_ground_factor(*options.source_ground, *options.target_ground, options.ground_weight));
+    result.factors.push_back(make_ground_factor(*options.source_ground, *options.target_ground, options.ground_weight,
+                                                options.ground_tilt_lever_arm));
   // Ablations of Eq. (quadrics distance): drop the rotation or the translation part of every residual.
   for (QuadricFactor& factor : result.factors) {
     if (!options.use_rotation_error) factor.rotation_mask.setZero();

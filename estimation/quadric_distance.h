@@ -93,10 +93,13 @@ struct GroundPlane {
 
 /// The ground constraint: a plane-to-plane factor aligning R n_x with n_y (rotation about the
 /// normal is free) and putting the source ground point -d_x n_x on the target ground plane
-/// (normal offset only). It is the quadric factor of two planes (I_R = I_t = [1,0,0]).
-/// Throws quadrix::Error if a normal is zero or not finite, or the weight is negative.
+/// (normal offset only). It is the quadric factor of two planes (I_R = I_t = [1,0,0]), except that
+/// the rotation residual is multiplied by `tilt_lever_arm` (metres): with L > 1 a tilt θ costs what
+/// lifting a ground point L metres out by L sin θ would, comparable with the centres' metres.
+/// Throws quadrix::Error if a normal is zero or not finite, the weight is negative, or the lever
+/// arm is not finite and positive.
 QuadricFactor make_ground_factor(const GroundPlane& source_ground, const GroundPlane& target_ground,
-                                 double weight = 1.0);
+                                 double weight = 1.0, double tilt_lever_arm = 1.0);
 
 /// True when a structure's defined principal axes (I_R[i] = 1, axes of `shape.rotation`) are each
 /// within `tolerance_degrees` of parallel, antiparallel or perpendicular to `ground_normal`
@@ -116,6 +119,7 @@ struct FactorBuildOptions {
   std::optional<GroundPlane> source_ground;  ///< with target_ground: adds the ground constraint factor
   std::optional<GroundPlane> target_ground;  ///< with source_ground: adds the ground constraint factor
   double ground_weight = 1.0;                ///< w of the ground constraint factor
+  double ground_tilt_lever_arm = 1.0;        ///< multiplies the ground factor's rotation residual, metres (make_ground_factor)
   bool use_rotation_error = true;            ///< keep e_R of Eq. (quadrics distance); false zeroes every factor's I_R (ablation "W/O e_R")
   bool use_translation_error = true;         ///< keep e_t of Eq. (quadrics distance); false zeroes every factor's I_t (ablation "W/O e_t")
 };

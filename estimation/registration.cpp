@@ -38,7 +38,7 @@ std::size_t count_quadrics(const SceneModel& model) { return model.augmented_beg
 }  // namespace
 
 FactorBuildOptions estimation_factor_options(const SceneModel& source, const SceneModel& target,
-                                             const EstimationOptions& options) {
+                                             const EstimationOptions& options, bool grounds_level) {
   FactorBuildOptions factor_options;
   factor_options.augment_non_central = options.augment_non_central;
   factor_options.manhattan_tolerance_degrees = options.manhattan_tolerance_degrees;
@@ -53,6 +53,7 @@ FactorBuildOptions estimation_factor_options(const SceneModel& source, const Sce
       factor_options.source_ground = GroundPlane{source.ground_normal, source.ground_offset};
       factor_options.target_ground = GroundPlane{target.ground_normal, target.ground_offset};
       factor_options.ground_weight = options.ground_weight;
+      if (grounds_level) factor_options.ground_tilt_lever_arm = options.level_ground_lever_arm;
     }
   }
   return factor_options;
@@ -218,13 +219,13 @@ std::vector<RegistrationCandidate> estimate_candidates(const SceneModel& source,
                                                        const CorrespondenceSet& correspondence_set,
                                                        const CompatibilityGraphs& graphs,
                                                        const GraduatedCliqueResult& cliques,
-                                                       const EstimationOptions& options) {
+                                                       const EstimationOptions& options, bool grounds_level) {
   CandidateContext context;
   context.source = &source;
   context.target = &target;
   context.source_shapes = decompose_records(source.records);
   context.target_shapes = decompose_records(target.records);
-  context.factor_options = estimation_factor_options(source, target, options);
+  context.factor_options = estimation_factor_options(source, target, options, grounds_level);
   context.refiner_options = options.refinement;
   // Without e_R or e_t some directions may be unconstrained by design: optimise what is left and keep
   // the SVD start along the rest (the paper's ablation rows), instead of refusing as degenerate.
@@ -411,7 +412,8 @@ RegistrationResult register_models(const SceneModel& source, const SceneModel& t
   for (const MaxCliqueResult& level : cliques.levels) counts.clique_sizes.push_back(level.size());
 
   result.candidates = timed(result, "estimation", [&] {
-    return estimate_candidates(source, target, correspondence_set, graphs, cliques, options.estimation);
+    return estimate_candidates(source, target, correspondence_set, graphs, cliques, options.estimation,
+                               grounds_level(source, target, options));
   });
   timed(result, "selection", [&] { select_answer(result, options); });
   return result;
@@ -806,15 +808,17 @@ double angle_between_axes_degrees(const Eigen::Vector3d& first, const Eigen::Vec
 
 }  // namespace
 
+bool grounds_level(const SceneModel& source, const SceneModel& target, const RegistrationOptions& options) {
+  return source.has_ground && target.has_ground &&
+         angle_between_axes_degrees(source.ground_normal, options.source_extraction.up) <= kLevelGroundDegrees &&
+         angle_between_axes_degrees(target.ground_normal, options.target_extraction.up) <= kLevelGroundDegrees;
+}
+
 void check_ground_agreement(RegistrationResult& result, const RegistrationOptions& options) {
   const double limit = options.ambiguity.ground_tilt_limit_degrees;
   if (result.status != RegistrationStatus::Ok || limit < 0.0) return;
-  const std::optional<Eigen::Vector4d> source_ground = ground_of(result.source_model), target_ground = ground_of(result.target_model);
-  if (!source_ground || !target_ground) return;
-  const Eigen::Vector3d source_normal = source_ground->head<3>(), target_normal = target_ground->head<3>();
-  if (angle_between_axes_degrees(source_normal, options.source_extraction.up) > kLevelGroundDegrees ||
-      angle_between_axes_degrees(target_normal, options.target_extraction.up) > kLevelGroundDegrees)
-    return;
+  if (!grounds_level(result.source_model, result.target_model, options)) return;
+  const Eigen::Vector3d source_normal = result.source_model.ground_normal, target_normal = result.target_model.ground_normal;
   const double tilt = angle_between_axes_degrees(result.transform.linear() * source_normal, target_normal);
   result.findings.grounds_disagree = tilt > limit;
   if (!result.findings.grounds_disagree) return;

@@ -55,6 +55,7 @@ struct EstimationOptions {
   bool augment_non_central = true;            ///< Augment(): samples on linear / planar centres (paper: yes)
   bool use_ground_constraint = true;          ///< add the ground plane-to-plane factor when both clouds have a ground
   double ground_weight = 1.0;                 ///< w of the ground factor
+  double level_ground_lever_arm = 100.0;      ///< with both grounds level (grounds_level), the ground factor's tilt residual is multiplied by this, metres: a tilt then costs what lifting a ground point this far out does (1: unscaled). Over the seven tuning sets (2,100 pairs), right answers more than 2 deg off went from 22 (1 m) to 13 (100 m; 21 at 30 m), right answers from 1,875 to 1,882, and no `ok` answer was wrong (docs/registration.md, "The ground's tilt")
   std::size_t minimum_inliers = 3;            ///< a candidate needs at least this many clique correspondences (paper: 3)
   bool refine = true;                         ///< false: each candidate is its SVD estimate T^0_k (ablation "W/O trans. refinement")
   bool use_rotation_error = true;             ///< false: refinement without e_R of Eq. (quadrics distance) (ablation "W/O e_R")
@@ -196,9 +197,10 @@ struct RegistrationResult {
 
 /// The factor options of candidate estimation between two models (Algorithm 1): Augment(), f_pp over
 /// the key-structure labels against each cloud's estimated ground normal, the ground factor when both
-/// clouds have a ground, and the e_R / e_t switches. register_models and the studies share it.
+/// clouds have a ground (its tilt weighed by `options.level_ground_lever_arm` when `grounds_level`),
+/// and the e_R / e_t switches. register_models and the studies share it.
 FactorBuildOptions estimation_factor_options(const SceneModel& source, const SceneModel& target,
-                                             const EstimationOptions& options);
+                                             const EstimationOptions& options, bool grounds_level = false);
 
 /// Registers two already-modelled scenes (everything after modelling: correspondences, graphs,
 /// cliques, Algorithm 1). `counts` source/target points and elements are left 0; timings have no
@@ -293,10 +295,15 @@ void check_free_space(RegistrationResult& result, const PointCloud& source, cons
                       const RangeImage& source_image, const RangeImage& target_image, const AmbiguityOptions& options);
 
 /// A ground whose normal lies within this of its extraction's up axis is level enough for
-/// check_ground_agreement, degrees. The grounds of the tuning sets lie within 0.91 deg of the up axis
+/// check_ground_agreement and for the refinement's weighed tilt (grounds_level), degrees. The grounds of the tuning sets lie within 0.91 deg of the up axis
 /// `auto` measured (every tenth pair of each of the five sets, 300 scans); a 3DTK scan's ground
 /// region, a ramp, 8.9 deg off it.
 inline constexpr double kLevelGroundDegrees = 3.0;
+
+/// Whether both models have a ground within kLevelGroundDegrees of their extraction's up axis
+/// (`options.source_extraction.up`, `options.target_extraction.up`): two scanners standing on level
+/// ground, whose grounds agree under the truth.
+bool grounds_level(const SceneModel& source, const SceneModel& target, const RegistrationOptions& options);
 
 /// Checks that an `ok` answer lays the source's ground on the target's (beyond the paper): both
 /// scanners stood on the same ground, so under the truth two level grounds agree. An answer that

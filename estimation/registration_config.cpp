@@ -147,6 +147,7 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::estimation, &EstimationOptions::augment_non_central>("estimation.augment_non_central", "Augment() of Algorithm 1: samples on linear and planar centres"),
       shared_key<&R::estimation, &EstimationOptions::use_ground_constraint>("estimation.use_ground_constraint", "add the ground plane-to-plane factor when both clouds have a ground"),
       shared_key<&R::estimation, &EstimationOptions::ground_weight>("estimation.ground_weight", "weight of the ground factor, unitless"),
+      shared_key<&R::estimation, &EstimationOptions::level_ground_lever_arm>("estimation.level_ground_lever_arm_m", "with both grounds level, the ground factor's tilt residual is multiplied by this: a tilt costs what lifting a ground point this far out does, metres (1: unscaled)"),
       shared_key<&R::estimation, &EstimationOptions::minimum_inliers>("estimation.minimum_inliers", "a candidate needs at least this many clique correspondences, correspondences (paper 3)"),
       // selection
       shared_key<&R::selection, &SelectionOptions::dcs_phi>("selection.dcs_phi", "Phi of the DCS kernel of the candidate score, unitless (published 0.5)"),
@@ -458,6 +459,9 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
       throw Error("ambiguity.free_space_height must be a height >= 0 in metres, got " + std::to_string(options.ambiguity.free_space_height));
     if (!(options.ambiguity.confirm_below >= 0.0 && options.ambiguity.confirm_below <= 1.0))
       throw Error("ambiguity.confirm_below must be a fraction in [0, 1], got " + std::to_string(options.ambiguity.confirm_below));
+    if (!(options.estimation.level_ground_lever_arm > 0.0))
+      throw Error("estimation.level_ground_lever_arm_m must be a length > 0 in metres, got " +
+                  std::to_string(options.estimation.level_ground_lever_arm));
     if (!(options.ambiguity.confirm_over_identity >= 0.0 && options.ambiguity.confirm_over_identity <= 1.0))
       throw Error("ambiguity.confirm_over_identity must be a fraction in [0, 1], got " +
                   std::to_string(options.ambiguity.confirm_over_identity));

@@ -331,7 +331,8 @@ std::vector<Problem> real_problems(const PairRow& pair, std::size_t pair_index, 
                   registered.message + ")";
   }
 
-  const FactorBuildOptions factor_options = estimation_factor_options(source, target, registration.estimation);
+  const FactorBuildOptions factor_options = estimation_factor_options(source, target, registration.estimation,
+                                                                          grounds_level(source, target, registration));
   const std::vector<QuadricDecomposition> source_shapes = decompose_records(source.records);
   const std::vector<QuadricDecomposition> target_shapes = decompose_records(target.records);
 

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 namespace quadrix {
@@ -143,6 +144,25 @@ TEST(QuadricDistance, GroundFactorAlignsNormalsAndOffsets) {
   EXPECT_NEAR(quadric_distance(factor, raised).norm(), 0.25, 1e-12);
   EXPECT_THROW(make_ground_factor({Eigen::Vector3d::Zero(), 0.0}, target), Error);
   EXPECT_THROW(make_ground_factor(source, target, -1.0), Error);
+}
+
+// The lever arm turns the ground factor's tilt residual into metres: a tilt θ of level grounds
+// costs L sin θ, what lifting a ground point L metres out costs; the offset residual keeps its metres.
+TEST(QuadricDistance, GroundFactorWeighsTiltByItsLeverArm) {
+  const GroundPlane level{Eigen::Vector3d::UnitZ(), 1.7};
+  const double lever_arm = 40.0, tilt = 2.0 * kPi / 180.0;
+  Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();
+  tilted.linear() = Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Vector12d unscaled = quadric_distance(make_ground_factor(level, level), tilted);
+  const Vector12d scaled = quadric_distance(make_ground_factor(level, level, 1.0, lever_arm), tilted);
+  EXPECT_NEAR(unscaled.head<3>().norm(), std::sin(tilt), 1e-12);
+  EXPECT_NEAR(scaled.head<3>().norm(), lever_arm * std::sin(tilt), 1e-9);
+  EXPECT_LT((scaled.tail<3>() - unscaled.tail<3>()).norm(), 1e-12);  // the offset is not scaled
+  Eigen::Isometry3d raised = Eigen::Isometry3d::Identity();
+  raised.translation().z() = 0.25;
+  EXPECT_NEAR(quadric_distance(make_ground_factor(level, level, 1.0, lever_arm), raised).norm(), 0.25, 1e-12);
+  for (const double bad : {0.0, -3.0, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_THROW(make_ground_factor(level, level, 1.0, bad), Error) << bad;
 }
 
 TEST(QuadricDistance, ManhattanFilterUsesTheGivenGroundNormal) {

@@ -293,12 +293,14 @@ TEST(LoopClosureSet, AnOkAnswerLandingLittleOfTheSourceIsConfirmedByTheDenseSear
 
 // An `ok` answer tilted 5.6 deg, found on the cross-sensor validation set (`quadrix synth
 // loop-closures --seed 2001 --sensor vlp16 --source-sensor hdl64`: street 2002, the HDL-64E's
-// pass-2 scan 19 onto the VLP-16's pass-1 scan 12, 4.1 m apart). Both grounds are level, and the
-// answer turns one 5.5 deg off the other: the grounds' agreement makes it `ambiguous`. Every other
-// check passes it, so without that one it is `ok` and wrong.
+// pass-2 scan 19 onto the VLP-16's pass-1 scan 12, 4.1 m apart) before the refinement weighed the
+// ground's tilt by its lever arm, so the test weighs it unscaled (1 m). Both grounds are level, and
+// the answer turns one 5.5 deg off the other: the grounds' agreement makes it `ambiguous`. Every
+// other check passes it, so without that one it is `ok` and wrong.
 TEST(LoopClosureSet, ATiltedAnswerAcrossSensorsIsNotOk) {
   const TurnedStreetPair pair = turned_street_pair(2002, 19, 12, 0.0, "hdl64", "vlp16");
-  const RegistrationOptions options = resolve_registration_options("auto", pair.source, "auto", pair.target);
+  RegistrationOptions options = resolve_registration_options("auto", pair.source, "auto", pair.target);
+  options.estimation.level_ground_lever_arm = 1.0;
   for (const double limit : {options.ambiguity.ground_tilt_limit_degrees, -1.0}) {
     RegistrationOptions tried = options;
     tried.ambiguity.ground_tilt_limit_degrees = limit;
@@ -312,6 +314,23 @@ TEST(LoopClosureSet, ATiltedAnswerAcrossSensorsIsNotOk) {
       EXPECT_TRUE(result.status == RegistrationStatus::Ok && !right) << result.message;
     }
   }
+}
+
+// The same pair with the ground's tilt weighed by the default lever arm. The tilted answer's pitch
+// came from a far object's centre, 3 m higher in the VLP-16's scan, which sees more of it, than in
+// the HDL-64E's. Once a tilt costs what it does to the ground points, the quadric answer stays level
+// (0.36 deg) and slides 1.9 m instead; the checks send it to the dense search, which settles it: the
+// answer is `ok`, right and level.
+TEST(LoopClosureSet, AGroundWeighedByItsLeverArmKeepsACrossSensorAnswerLevel) {
+  const TurnedStreetPair pair = turned_street_pair(2002, 19, 12, 0.0, "hdl64", "vlp16");
+  const RegistrationOptions options = resolve_registration_options("auto", pair.source, "auto", pair.target);
+  ASSERT_GT(options.estimation.level_ground_lever_arm, 1.0);
+  const RegistrationResult result = register_clouds(pair.source, pair.target, options);
+  std::printf("%s\n", result.message.c_str());
+  EXPECT_EQ(result.status, RegistrationStatus::Ok) << result.message;
+  EXPECT_TRUE(registration_succeeded(result.transform, pair.truth)) << result.message;
+  EXPECT_LT(rotation_error_degrees(result.transform, pair.truth), 1.0) << result.message;
+  EXPECT_FALSE(result.findings.grounds_disagree) << result.message;
 }
 
 }  // namespace

@@ -237,6 +237,7 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("low_free_space.yaml", "ambiguity:\n  free_space_height: -1\n", "ambiguity.free_space_height must be a height >= 0");
   expect_error_naming("nan_ground_tilt.yaml", "ambiguity:\n  ground_tilt_limit_deg: .nan\n", "ambiguity.ground_tilt_limit_deg' must be a finite number");
   expect_error_naming("nan_free_space.yaml", "ambiguity:\n  free_space_limit: .nan\n", "key 'ambiguity.free_space_limit' must be a finite number");
+  expect_error_naming("no_lever_arm.yaml", "estimation:\n  level_ground_lever_arm_m: 0\n", "estimation.level_ground_lever_arm_m must be a length > 0");
   expect_error_naming("gain_above_one.yaml", "ambiguity:\n  confirm_over_identity: 1.5\n", "ambiguity.confirm_over_identity must be a fraction in [0, 1]");
   RegistrationOptions ignored;
   EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
