@@ -415,7 +415,8 @@ std::string no_point_in_range_message(const Eigen::Matrix3Xd& points, const Extr
           << options.sensor_origin.z() << "))";
   if (std::isfinite(nearest)) message << "; the points lie " << nearest << " to " << farthest << " m from it";
   if (std::isfinite(nearest) && options.maximum_range > 0.0 && nearest > options.maximum_range)
-    message << ": is the cloud in metres, and in its sensor's frame with the sensor at the origin?";
+    message << ": is the cloud in metres, and in its sensor's frame with the sensor at the origin? (A cloud in a "
+               "map's frame needs its sensor's position: --sensor-origin, --source-origin, --target-origin)";
   return message.str();
 }
 

@@ -81,6 +81,18 @@ bool finite_record(const QuadricRecord& record) {
 
 }  // namespace
 
+SceneModel translated(SceneModel model, const Eigen::Vector3d& offset) {
+  if (!offset.allFinite()) throw Error("translated: the offset must be finite");
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.translation() = offset;
+  for (QuadricRecord& record : model.records) {
+    record.q = record.quadric().transformed(motion).normalized().parameters();
+    record.full_center += offset;
+  }
+  if (model.has_ground) model.ground_offset -= model.ground_normal.dot(offset);
+  return model;
+}
+
 void validate_scene_model(const SceneModel& model) {
   const std::size_t count = model.records.size();
   if (model.types.size() != count)

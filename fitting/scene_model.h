@@ -74,6 +74,12 @@ inline constexpr std::size_t kMaxExactSourcePoints = std::size_t{1} << 53;
 /// kMaxExactSourcePoints); throws quadrix::Error naming the field.
 void validate_scene_model(const SceneModel& model);
 
+/// The model moved by `offset` (metres): every record's quadric (Q' = T^-T Q T^-1, renormalised as
+/// make_quadric_record does) and full centre, and the ground plane (offset' = offset - n . t). What
+/// `quadrix model --sensor-origin` does to a model of the sensor-centred cloud to put it back in the
+/// file's frame. Types, classes, scales, rotations and descriptors are unchanged.
+SceneModel translated(SceneModel model, const Eigen::Vector3d& offset);
+
 /// Binary scene-model format, version 1 (all little-endian, IEEE-754):
 ///   magic "QDXSCENE" (8 bytes), u32 version = 1,
 ///   u64 record count N, u64 augmented_begin, u64 source_point_count,

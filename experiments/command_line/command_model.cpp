@@ -1,6 +1,6 @@
 // `quadrix model INPUT... [--poses P,...] --out model.json [--binary model.qsm] [--mesh model.ply]
-// [--elements elements.ply] [--picture model.png] [--preset P] [--labels FILE] [--score-labels FILE]
-// [--fitter NAME] [--no-page]`:
+// [--elements elements.ply] [--picture model.png] [--preset P] [--sensor-origin X,Y,Z] [--labels FILE]
+// [--score-labels FILE] [--fitter NAME] [--no-page]`:
 // the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose)
 // (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling"). Beside model.json it writes the
 // interactive page model.html (quadrix view) unless --no-page.
@@ -8,6 +8,7 @@
 #include "experiments/reports/interactive_page.h"
 #include "experiments/reports/model_picture.h"
 #include "experiments/studies/modelling_evaluation.h"
+#include "estimation/registration.h"
 #include "estimation/registration_config.h"
 #include "fitting/scene_modelling.h"
 #include "geometry/error.h"
@@ -46,6 +47,7 @@ struct ModelCommandOptions {
   double view_elevation_deg = 30.0;   ///< picture camera elevation, degrees
   double view_zoom = 1.0;             ///< picture zoom (> 1: closer)
   bool no_page = false;               ///< skip the interactive page beside --out
+  std::vector<double> sensor_origin{0.0, 0.0, 0.0};  ///< where the sensor stood in the file's frame (one input, no --poses)
 };
 
 // A distinct colour per element (golden-ratio hue walk, full saturation).
@@ -319,7 +321,16 @@ void run(const ModelCommandOptions& options) {
 
   CloudReadOptions read_options;
   read_options.format = cloud_format_from_name(options.format);
+  const Eigen::Vector3d sensor_origin(options.sensor_origin.data());
+  if (!sensor_origin.allFinite()) throw Error("--sensor-origin: expected three finite numbers X,Y,Z in metres");
+  const bool centred = !sensor_origin.isZero(0.0);
+  if (centred && (options.inputs.size() != 1 || !options.poses.empty()))
+    throw Error("--sensor-origin: takes one input without --poses (stations merged by pose are modelled in the world frame)");
   const PointCloud cloud = read_merged_clouds(options, read_options);
+  // A cloud in a map's frame is modelled centred on its sensor (the extraction measures ranges and
+  // heights from the origin), and the model is moved back: every output is in the file's frame.
+  const PointCloud centred_cloud = centred ? centred_on_sensor(cloud, sensor_origin) : PointCloud();
+  const PointCloud& modelled = centred ? centred_cloud : cloud;
   std::vector<std::uint32_t> labels;
   if (!options.labels.empty()) {
     labels = read_semantic_kitti_labels(options.labels, cloud.size());
@@ -328,10 +339,11 @@ void run(const ModelCommandOptions& options) {
   // Read before modelling, so a bad file fails at once.
   std::vector<std::uint32_t> score_labels;
   if (!options.score_labels.empty()) score_labels = read_semantic_kitti_labels(options.score_labels, cloud.size());
-  const ModellingResult result = model_scene(cloud, extraction, modelling, labels);
+  ModellingResult result = model_scene(modelled, extraction, modelling, labels);
+  if (centred) result.model = translated(std::move(result.model), sensor_origin);
   const SceneModel& model = result.model;
   std::optional<ClassScores> scores;
-  if (!options.score_labels.empty()) scores = score_element_classes(cloud, result.extraction, score_labels, extraction);
+  if (!options.score_labels.empty()) scores = score_element_classes(modelled, result.extraction, score_labels, extraction);
 
   // Counts per class and type (quadrics kept in the model; elements extracted).
   std::map<std::pair<std::string, std::string>, int> quadric_counts;
@@ -368,6 +380,11 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   std::string presets;
   for (const auto& name : extraction_preset_names()) presets += (presets.empty() ? "" : "|") + name;
   command->add_option("--preset", options->preset, "Sensor preset: " + presets)->capture_default_str();
+  command->add_option("--sensor-origin", options->sensor_origin,
+                      "Where the sensor stood in the file's frame, X,Y,Z in metres (default: the origin). For a cloud in "
+                      "a map's frame: it is modelled centred on its sensor, and every output is in the file's frame")
+      ->expected(3)
+      ->delimiter(',');
   command->add_option("--labels", options->labels,
                       "SemanticKITTI .label file: use the labels semantic mode instead of geometry-only clusters");
   command->add_option("--score-labels", options->score_labels,

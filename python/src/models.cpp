@@ -3,6 +3,7 @@
 #include "bindings.h"
 #include "experiments/reports/fit_report.h"
 
+#include "estimation/registration.h"
 #include "estimation/registration_config.h"
 #include "fitting/quadric_fitter.h"
 #include "fitting/scene_modelling.h"
@@ -172,9 +173,14 @@ when it is not a valid model (bad magic, truncation, checksum mismatch, invalid 
   module.def(
       "model",
       [](const py::object& cloud, const std::string& preset, const py::object& config, const py::object& labels,
-         const py::object& fitter) {
+         const py::object& fitter, const py::object& sensor_origin) {
         std::shared_ptr<Cloud> holder;
-        const PointCloud& points = cloud_from_object(cloud, "cloud", holder);
+        const PointCloud& given = cloud_from_object(cloud, "cloud", holder);
+        // As `quadrix model --sensor-origin`: modelled centred on the sensor, the model moved back.
+        const Eigen::Vector3d origin = point_from_object(sensor_origin, "sensor_origin");
+        const bool centred = !origin.isZero(0.0);
+        const PointCloud centred_cloud = centred ? centred_on_sensor(given, origin) : PointCloud();
+        const PointCloud& points = centred ? centred_cloud : given;
         RegistrationOptions options = registration_options_from(preset, points, preset, points, config, py::none(), nullptr);
         ExtractionOptions extraction = options.source_extraction;
         const std::vector<std::uint32_t> point_labels = labels_from_object(labels, points.size(), "labels");
@@ -185,14 +191,14 @@ when it is not a valid model (bad magic, truncation, checksum mismatch, invalid 
         {
           py::gil_scoped_release release;
           ModellingResult modelling = model_scene(points, extraction, options.modelling, point_labels);
-          result->model = std::move(modelling.model);
+          result->model = centred ? translated(std::move(modelling.model), origin) : std::move(modelling.model);
           result->status = modelling_status_name(modelling.status);
           result->message = std::move(modelling.message);
         }
         return result;
       },
       py::arg("cloud"), py::arg("preset") = "auto", py::arg("config") = py::none(), py::arg("labels") = py::none(),
-      py::arg("fitter") = py::none(), R"doc(
+      py::arg("fitter") = py::none(), py::arg("sensor_origin") = py::none(), R"doc(
 Models a cloud with quadrics (paper §"Quadric-based Scene Representation"): extraction of ground,
 walls, poles and objects, one quadric per element, augmented points in sparse scenes. Returns a
 quadrix.Model.
@@ -203,7 +209,9 @@ for each side, so this is the model ``register`` builds for that cloud before au
 config: a dict in the YAML schema (see ``config``) or a YAML file path, applied after the preset.
 labels: optional N SemanticKITTI labels (switches the extraction to the labels semantic mode, as
 ``quadrix model --labels``). fitter: a fitter name overriding the preset's (statistical, taubin,
-constrained, cgal, learned, auto).
+constrained, cgal, learned, auto). sensor_origin: where the sensor stood in the cloud's frame, (x, y,
+z) in metres, for a cloud in a map's frame: it is modelled centred on the sensor (``auto`` measures
+it there) and the model is returned in the cloud's frame, as ``quadrix model --sensor-origin``.
 
 Releases the GIL while modelling. Raises ValueError for an unknown preset or fitter, KeyError for an
 unknown config key.

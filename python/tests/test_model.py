@@ -92,3 +92,19 @@ def test_fit_rejects_unknown_names():
         quadrix.fit(cylinder_points(), type="hyperboloid")
     with pytest.raises(ValueError, match="newton"):
         quadrix.fit(cylinder_points(), fitter="newton")
+
+
+def test_a_cloud_in_a_map_frame_is_modelled_around_its_sensor_origin(street):
+    # Coordinates on a 1/1024 m grid, so moving them 770 m out and back is exact in float32 and both
+    # models see the very same points.
+    points = np.round(np.asarray(street["clouds"][0].points, np.float64) * 1024.0) / 1024.0
+    origin = np.array([640.0, -384.0, 24.0])
+    in_sensor_frame = quadrix.model(points.astype(np.float32), preset="vlp64")
+    in_map_frame = quadrix.model((points + origin).astype(np.float32), preset="vlp64", sensor_origin=origin)
+    assert in_map_frame.status == "ok", in_map_frame.message
+    assert in_map_frame.types == in_sensor_frame.types
+    np.testing.assert_allclose(in_map_frame.centre, in_sensor_frame.centre + origin, atol=1e-6)
+    normal = np.array(in_sensor_frame.ground["normal"])
+    assert in_map_frame.ground["offset"] == pytest.approx(in_sensor_frame.ground["offset"] - normal @ origin, abs=1e-6)
+    with pytest.raises(ValueError, match="sensor_origin"):
+        quadrix.model(points.astype(np.float32), preset="vlp64", sensor_origin=[1.0, 2.0])

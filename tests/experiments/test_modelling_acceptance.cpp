@@ -272,6 +272,64 @@ TEST(ClassScores, ModelCommandPrintsAndWritesThemAndRefusesAWrongLabelFile) {
   std::filesystem::remove_all(folder);
 }
 
+// A scan moved into a map's frame (its sensor 770 m from the map's origin) is modelled by `quadrix
+// model --sensor-origin` as the same scan in its sensor's frame is, and written in the file's frame:
+// the same quadrics, each moved by the sensor's position, and the ground with them. Without the
+// origin every point lies beyond the range limits, and the message says what to give. The
+// coordinates are multiples of 1/1024 m, so moving them there and back is exact in floats and the
+// two runs see the very same points.
+TEST(ModelCommand, ACloudInAMapsFrameIsModelledAroundItsSensorAndWrittenInTheFilesFrame) {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "quadrix_model_origin_test";
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  const Scene scene = make_street_scene(4);
+  const SimulatedScan scan = simulate_scan(scene, RayCaster(scene), sensor_preset("hdl64"), scene.default_lidar_poses[0], 4, 0);
+  const Eigen::Vector3f origin(640.0f, -384.0f, 24.0f);
+  PointCloud in_sensor_frame, in_map_frame;
+  in_sensor_frame.positions = (scan.cloud.positions * 1024.0f).array().round().matrix() / 1024.0f;
+  in_map_frame.positions = in_sensor_frame.positions.colwise() + origin;
+  write_point_cloud((folder / "scan.ply").string(), in_sensor_frame);
+  write_point_cloud((folder / "map.ply").string(), in_map_frame);
+  const auto model = [&](const std::string& input, const std::string& arguments, const std::string& name) {
+    const std::string command = std::string(QUADRIX_EXECUTABLE) + " model '" + (folder / input).string() + "' --no-page " +
+                                arguments + " --out '" + (folder / (name + ".json")).string() + "' > '" +
+                                (folder / (name + ".txt")).string() + "' 2>&1";
+    EXPECT_EQ(std::system(command.c_str()), 0) << command;
+    std::ifstream log_file(folder / (name + ".txt"));
+    const std::string log((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
+    std::ifstream json_file(folder / (name + ".json"));
+    return std::make_pair(nlohmann::json::parse(json_file), log);
+  };
+  const auto [sensor_frame, sensor_log] = model("scan.ply", "", "sensor_frame");
+  const auto [map_frame, map_log] = model("map.ply", "--sensor-origin 640,-384,24", "map_frame");
+  const auto [no_origin, no_origin_log] = model("map.ply", "", "no_origin");
+  const nlohmann::json& expected = sensor_frame["quadrics"];
+  const nlohmann::json& moved = map_frame["quadrics"];
+  ASSERT_GE(expected.size(), 20u) << sensor_log;
+  ASSERT_EQ(moved.size(), expected.size()) << map_log;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(moved[i]["class"], expected[i]["class"]) << i;
+    EXPECT_EQ(moved[i]["type"], expected[i]["type"]) << i;
+    EXPECT_EQ(moved[i]["points"], expected[i]["points"]) << i;
+    for (int axis = 0; axis < 3; ++axis)
+      EXPECT_NEAR(moved[i]["center"][axis].get<double>(), expected[i]["center"][axis].get<double>() + origin[axis], 1e-6)
+          << "quadric " << i << ", axis " << axis;
+  }
+  ASSERT_TRUE(sensor_frame["ground"]["found"].get<bool>()) << sensor_log;
+  const Eigen::Vector3d normal(sensor_frame["ground"]["normal"][0].get<double>(), sensor_frame["ground"]["normal"][1].get<double>(),
+                               sensor_frame["ground"]["normal"][2].get<double>());
+  EXPECT_NEAR(map_frame["ground"]["offset"].get<double>(),
+              sensor_frame["ground"]["offset"].get<double>() - normal.dot(origin.cast<double>()), 1e-6);
+  EXPECT_LT(no_origin["quadrics"].size(), 3u) << no_origin_log;
+  EXPECT_NE(no_origin_log.find("--sensor-origin"), std::string::npos) << no_origin_log;
+  // One input only: stations merged by pose are modelled in the world frame.
+  EXPECT_NE(std::system((std::string(QUADRIX_EXECUTABLE) + " model '" + (folder / "map.ply").string() + "' '" +
+                         (folder / "scan.ply").string() + "' --sensor-origin 640,-384,24 --no-page --out '" +
+                         (folder / "two.json").string() + "' > /dev/null 2>&1").c_str()), 0);
+  EXPECT_FALSE(std::filesystem::exists(folder / "two.json"));
+  std::filesystem::remove_all(folder);
+}
+
 TEST(ModelPicture, RendersAMeshWhereTheCameraLooks) {
   // A red sphere of radius 1 at the origin, seen from the default camera: the picture has red in
   // its middle, background in its corners, and its shading varies (lit and unlit sides).
