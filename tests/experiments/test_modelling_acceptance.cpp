@@ -233,12 +233,18 @@ TEST(ClassScores, LabelsModeAgreesWithItsOwnLabelsOnLabelledKittiFrames) {
   }
 }
 
-TEST(ClassScores, ModelCommandPrintsAndWritesThemAndRefusesAWrongLabelFile) {
-  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "quadrix_class_scores_test";
+// Empties (or makes) `folder` and returns the HDL-64E scan of street 4 the model
+// command tests run on.
+SimulatedScan street_scan_in_fresh_folder(const std::filesystem::path& folder) {
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
   const Scene scene = make_street_scene(4);
-  const SimulatedScan scan = simulate_scan(scene, RayCaster(scene), sensor_preset("hdl64"), scene.default_lidar_poses[0], 4, 0);
+  return simulate_scan(scene, RayCaster(scene), sensor_preset("hdl64"), scene.default_lidar_poses[0], 4, 0);
+}
+
+TEST(ClassScores, ModelCommandPrintsAndWritesThemAndRefusesAWrongLabelFile) {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "quadrix_class_scores_test";
+  const SimulatedScan scan = street_scan_in_fresh_folder(folder);
   PointCloud positions_only;
   positions_only.positions = scan.cloud.positions;
   write_point_cloud((folder / "scan.ply").string(), positions_only);
@@ -280,10 +286,7 @@ TEST(ClassScores, ModelCommandPrintsAndWritesThemAndRefusesAWrongLabelFile) {
 // two runs see the very same points.
 TEST(ModelCommand, ACloudInAMapsFrameIsModelledAroundItsSensorAndWrittenInTheFilesFrame) {
   const std::filesystem::path folder = std::filesystem::temp_directory_path() / "quadrix_model_origin_test";
-  std::filesystem::remove_all(folder);
-  std::filesystem::create_directories(folder);
-  const Scene scene = make_street_scene(4);
-  const SimulatedScan scan = simulate_scan(scene, RayCaster(scene), sensor_preset("hdl64"), scene.default_lidar_poses[0], 4, 0);
+  const SimulatedScan scan = street_scan_in_fresh_folder(folder);
   const Eigen::Vector3f origin(640.0f, -384.0f, 24.0f);
   PointCloud in_sensor_frame, in_map_frame;
   in_sensor_frame.positions = (scan.cloud.positions * 1024.0f).array().round().matrix() / 1024.0f;
