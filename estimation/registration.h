@@ -200,7 +200,7 @@ struct RegistrationResult {
 /// clouds have a ground (its tilt weighed by `options.level_ground_lever_arm` when `grounds_level`),
 /// and the e_R / e_t switches. register_models and the studies share it.
 FactorBuildOptions estimation_factor_options(const SceneModel& source, const SceneModel& target,
-                                             const EstimationOptions& options, bool grounds_level = false);
+                                             const EstimationOptions& options, bool grounds_level);
 
 /// Registers two already-modelled scenes (everything after modelling: correspondences, graphs,
 /// cliques, Algorithm 1). `counts` source/target points and elements are left 0; timings have no
@@ -295,9 +295,9 @@ void check_free_space(RegistrationResult& result, const PointCloud& source, cons
                       const RangeImage& source_image, const RangeImage& target_image, const AmbiguityOptions& options);
 
 /// A ground whose normal lies within this of its extraction's up axis is level enough for
-/// check_ground_agreement and for the refinement's weighed tilt (grounds_level), degrees. The grounds of the tuning sets lie within 0.91 deg of the up axis
-/// `auto` measured (every tenth pair of each of the five sets, 300 scans); a 3DTK scan's ground
-/// region, a ramp, 8.9 deg off it.
+/// check_ground_agreement and for the refinement's weighed tilt (grounds_level), degrees. The
+/// grounds of the tuning sets lie within 0.91 deg of the up axis `auto` measured (every tenth pair
+/// of each of the five sets, 300 scans); a 3DTK scan's ground region, a ramp, 8.9 deg off it.
 inline constexpr double kLevelGroundDegrees = 3.0;
 
 /// Whether both models have a ground within kLevelGroundDegrees of their extraction's up axis
