@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
@@ -73,6 +74,10 @@ int main(int argc, char** argv) {
     // codes, 105-114, would read as something else).
     return app.exit(error) == 0 ? 0 : 2;
   } catch (const quadrix::Error& error) {
+    std::fprintf(stderr, "quadrix: error: %s\n", bounded(error.what()).c_str());
+    return 2;
+  } catch (const std::filesystem::filesystem_error& error) {
+    // A path the system refused (permission, a full or read-only disk): the user's to fix, not a fault.
     std::fprintf(stderr, "quadrix: error: %s\n", bounded(error.what()).c_str());
     return 2;
   } catch (const std::exception& error) {
