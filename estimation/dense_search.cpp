@@ -429,6 +429,20 @@ void validate_dense_search_options(const DenseSearchOptions& options) {
   if (!(options.minimum_overlap >= 0.0 && options.minimum_overlap <= 1.0)) fail("minimum_overlap", "in [0, 1]", options.minimum_overlap);
   if (options.normal_neighbours < 3) fail("normal_neighbours", "at least 3", static_cast<double>(options.normal_neighbours));
   if (options.source_samples < 6) fail("source_samples", "at least 6", static_cast<double>(options.source_samples));
+  // The grid of starts, each an ICP run, is bounded (the defaults start 85 and 5): a range of 1e19 m
+  // would ask for more starts than a long holds, and ICP from every one of them would never end.
+  constexpr double kMaxGridStarts = 1000.0;
+  const auto grid_starts = [&](double range, double step, double across_range) {
+    return (2.0 * std::floor(range / step + 1e-9) + 1.0) * (2.0 * std::floor(across_range / options.across_step + 1e-9) + 1.0);
+  };
+  if (!(grid_starts(options.range, options.step, options.across_range) <= kMaxGridStarts))
+    fail("range", "at most 1000 starts with step, across_range and across_step (got that many starts)",
+         grid_starts(options.range, options.step, options.across_range));
+  if (!(grid_starts(options.range_with_correlation, options.step_with_correlation,
+                    options.across_range_with_correlation) <= kMaxGridStarts))
+    fail("range_with_correlation",
+         "at most 1000 starts with step_with_correlation, across_range_with_correlation and across_step (got that many starts)",
+         grid_starts(options.range_with_correlation, options.step_with_correlation, options.across_range_with_correlation));
   validate_ground_correlation_options(options.correlation);
 }
 

@@ -51,7 +51,8 @@ struct DenseSearchOptions {
 /// must be positive, got 0"): voxel_size, correspondence_distance, step, across_step and
 /// step_with_correlation positive, range, across_range, range_with_correlation,
 /// across_range_with_correlation, refine_band, decisive_margin and ok_margin not negative, minimum_overlap in [0, 1],
-/// max_refined at least 1, normal_neighbours at least 3, source_samples at least 6; then the
+/// max_refined at least 1, normal_neighbours at least 3, source_samples at least 6, at most 1,000
+/// grid starts (with and without the correlation's poses); then the
 /// correlation's options (validate_ground_correlation_options).
 void validate_dense_search_options(const DenseSearchOptions& options);
 

@@ -17,6 +17,9 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <iterator>
+#include <stdexcept>
 #include <sstream>
 #include <tuple>
 #include <type_traits>
@@ -208,6 +211,153 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
   };
 }
 
+// The valid range of every number, integer and list key: [minimum, maximum], and whether 0 (the
+// key's documented "off") is also valid. Three kinds of bound:
+//  - sense: a length, angle or fraction outside what the quantity can mean (angles beyond 90 deg
+//    from up, fractions beyond 1, lengths beyond a kilometre of scene) or a positive length so small
+//    (below 1-5 cm, under any scanner's noise) that a far point's cell index leaves the range of the
+//    integers the voxel hashes use;
+//  - work: every value that sets an amount of work (neighbours, iterations, samples, starts, poses,
+//    reaches over cell sizes, list lengths) is capped near ten times its default, so a run stays
+//    within minutes whatever the file says (dense_search.normal_neighbours 10,000 took over 120 s,
+//    dense_search.iterations 2^31 over 18 minutes; half_turn_samples 2^63 asked for 2^63 points);
+//  - verification: a threshold of the checks that decide `ok` cannot be set where it silently stops
+//    checking. The documented off values (a negative margin or limit, a zero floor) stay valid, and
+//    `quadrix register` names every check they switch off; values beyond them that would switch a
+//    check off without saying so are refused. The translation and rotation beyond which two answers
+//    disagree are capped at the success rule (2 m, 5 deg): two answers farther apart cannot both be
+//    right, so counting them as agreeing hides a rival. A winning clique keeps its floor of 5: 3 or 4
+//    mutually consistent pairs arise by chance among hundreds, and 3 is every candidate. The dense search's ICP pairs at most 1 m
+//    apart: at 2 m an optimum's basin swallowed its rivals and a 3DTK pair came out `ok` 1.46 m
+//    and 6.7 deg off (docs/reliability.md). Its settled answer keeps a floor of 0.35 and a margin of
+//    0.01 (wrong settles measured 0.23-0.33 of the source on the target, right ones 0.44-0.79; a
+//    margin of 0 lets a tie settle). The best/second score ratio stays below 1: the best score is the
+//    lowest, so a ratio of 1 or more can never be exceeded and the close-scores finding would vanish.
+struct KeyRange {
+  const char* path;
+  double minimum;
+  double maximum;
+  bool zero_allowed;
+};
+
+constexpr double kIntLimit = 2147483647.0;  // integers only need to fit an int (options that count points)
+
+constexpr KeyRange kKeyRanges[] = {
+    {"extraction.minimum_range", 0.0, 1000.0, false},
+    {"extraction.maximum_range", 0.1, 1e5, true},
+    {"extraction.isolation_cell", 0.01, 100.0, true},
+    {"extraction.isolation_neighbours", 1.0, 1000.0, false},
+    {"extraction.ground.inlier_distance", 0.001, 10.0, false},
+    {"extraction.ground.max_slope_deg", 0.0, 90.0, false},
+    {"extraction.ground.max_step_height", 0.0, 100.0, false},
+    {"extraction.planes.voxel_size", 0.05, 100.0, false},
+    {"extraction.planes.merge_distance", 0.0, 100.0, false},
+    {"extraction.planes.normal_cosine", 0.0, 1.0, false},
+    {"extraction.planes.eigenvalue_ratio", 1.0, 1e9, false},
+    {"extraction.planes.minimum_plane_points", 1.0, kIntLimit, false},
+    {"extraction.planes.cluster_plane_width", 0.0, 1000.0, false},
+    {"extraction.planes.cluster_plane_area", 0.0, 1e6, false},
+    {"extraction.trunks.maximum_radius", 0.01, 100.0, false},
+    {"extraction.trunks.minimum_height", 0.0, 1000.0, false},
+    {"extraction.trunks.crownless_minimum_radius", 0.0, 100.0, false},
+    {"extraction.trunks.crownless_slice_points", 1.0, 1e6, false},
+    {"extraction.trunks.crownless_top_tolerance_deg", 0.0, 90.0, false},
+    {"extraction.stems.slice_height", 0.05, 100.0, false},
+    {"extraction.stems.maximum_radius", 0.01, 100.0, false},
+    {"extraction.stems.isolation_radius", 0.0, 100.0, false},
+    {"extraction.stems.minimum_span", 0.0, 1000.0, false},
+    {"extraction.stems.minimum_top", 0.0, 1000.0, false},
+    {"extraction.stems.minimum_sections", 1.0, 1e6, false},
+    {"extraction.clusters.radius", 0.05, 100.0, false},
+    {"extraction.clusters.minimum_points", 1.0, kIntLimit, false},
+    {"extraction.clusters.maximum_points", 1.0, kIntLimit, false},
+    {"extraction.clusters.maximum_extent", 0.01, 1e5, false},
+    {"extraction.lines.inlier_distance", 0.001, 10.0, false},
+    {"extraction.lines.minimum_points", 2.0, kIntLimit, false},
+    {"extraction.lines.minimum_length", 0.0, 1e4, false},
+    {"extraction.shapes.simplification_voxel", 0.001, 10.0, true},
+    {"extraction.shapes.epsilon", 0.001, 10.0, false},
+    {"extraction.shapes.cluster_epsilon", 0.001, 100.0, false},
+    {"extraction.shapes.minimum_points", 10.0, kIntLimit, false},
+    {"extraction.shapes.normal_threshold", 0.0, 1.0, false},
+    {"modelling.quadrics_per_class", 0.0, 1000.0, false},
+    {"modelling.augmentation_threshold", 0.0, 100000.0, false},
+    {"modelling.augmented_elements_per_class", 0.0, 1000.0, false},
+    {"modelling.augmentation_voxel", 0.05, 100.0, false},
+    {"modelling.maximum_augmented_points", 1.0, 20000.0, false},
+    {"matching.top_k_similar", 1.0, 100.0, false},
+    {"matching.thresholds", 0.0, 10.0, false},
+    {"matching.clique_time_limit_ms", 1.0, 600000.0, false},
+    {"matching.clique_threads", 0.0, 64.0, false},
+    {"estimation.max_iterations", 1.0, 10000.0, false},
+    {"estimation.function_tolerance", 0.0, 1.0, false},
+    {"estimation.manhattan_tolerance_degrees", 0.0, 90.0, false},
+    {"estimation.ground_weight", 0.0, 1e6, false},
+    {"estimation.level_ground_lever_arm_m", 0.001, 1e6, false},
+    {"estimation.minimum_inliers", 3.0, 1000.0, false},
+    {"selection.dcs_phi", 1e-6, 1e6, false},
+    {"selection.manhattan_tolerance_degrees", 0.0, 90.0, false},
+    {"ambiguity.score_ratio", 0.0, 0.99, false},
+    {"ambiguity.translation_disagreement", 0.01, 2.0, false},
+    {"ambiguity.rotation_disagreement_degrees", 0.01, 5.0, false},
+    {"ambiguity.minimum_clique_for_ok", 5.0, 10000.0, false},
+    {"ambiguity.overlap_margin", -1.0, 1.0, false},
+    {"ambiguity.minimum_overlap", 0.0, 1.0, false},
+    {"ambiguity.isolation_cell", 0.01, 100.0, true},
+    {"ambiguity.isolation_neighbours", 1.0, 1000.0, false},
+    {"ambiguity.confirm_below", 0.0, 1.0, false},
+    {"ambiguity.confirm_over_identity", 0.0, 1.0, false},
+    {"ambiguity.half_turn_margin", -1.0, 1.0, false},
+    {"ambiguity.half_turn_ok_margin", -1.0, 1.0, false},
+    {"ambiguity.half_turn_samples", 6.0, 20000.0, false},
+    {"ambiguity.half_turn_votes", 0.0, 64.0, false},
+    {"ambiguity.half_turn_correlation_starts", 0.0, 64.0, false},
+    {"ambiguity.half_turn_correlation_reach", 0.0, 100.0, false},
+    {"ambiguity.free_space_limit", -1.0, 1.0, false},
+    {"ambiguity.free_space_height", 0.0, 100.0, false},
+    {"ambiguity.ground_tilt_limit_deg", -1.0, 45.0, false},
+    {"dense_search.voxel_size", 0.02, 10.0, false},
+    {"dense_search.source_samples", 6.0, 20000.0, false},
+    {"dense_search.normal_neighbours", 3.0, 50.0, false},
+    {"dense_search.correspondence_distance", 0.05, 1.0, false},
+    {"dense_search.iterations", 1.0, 100.0, false},
+    {"dense_search.step", 0.05, 100.0, false},
+    {"dense_search.range", 0.0, 100.0, false},
+    {"dense_search.across_step", 0.05, 100.0, false},
+    {"dense_search.across_range", 0.0, 100.0, false},
+    {"dense_search.range_with_correlation", 0.0, 100.0, false},
+    {"dense_search.step_with_correlation", 0.05, 100.0, false},
+    {"dense_search.across_range_with_correlation", 0.0, 100.0, false},
+    {"dense_search.refine_band", 0.0, 1.0, false},
+    {"dense_search.max_refined", 1.0, 64.0, false},
+    {"dense_search.minimum_overlap", 0.35, 1.0, false},
+    {"dense_search.decisive_margin", 0.01, 1.0, false},
+    {"dense_search.ok_margin", 0.0, 1.0, false},
+    {"dense_search.correlation.poses", 0.0, 32.0, false},
+    {"dense_search.correlation.reach", 1.0, 100.0, false},
+    {"dense_search.correlation.yaw_step_degrees", 1.0, 180.0, false},
+    {"dense_search.correlation.coarse_cell", 0.5, 20.0, false},
+    {"dense_search.correlation.fine_cell", 0.1, 20.0, false},
+    {"dense_search.correlation.minimum_height", -10.0, 100.0, false},
+    {"dense_search.correlation.maximum_height", -10.0, 1000.0, false},
+    {"dense_search.correlation.separation", 0.0, 100.0, false},
+    {"dense_search.correlation.separation_degrees", 0.0, 180.0, false},
+};
+
+std::string number_text(double value);
+
+// A value quoted in an error message: at most `shown` characters of it (a 100 MB string is not echoed).
+std::string excerpt(const std::string& text, std::size_t shown = 40) {
+  if (text.size() <= shown) return text;
+  return text.substr(0, shown) + "... (" + std::to_string(text.size()) + " characters)";
+}
+
+// The number a ranged member holds, for the range check.
+bool outside_range(const RegistrationConfigKey& key, double value) {
+  if (key.zero_allowed && value == 0.0) return false;
+  return !(value >= key.minimum && value <= key.maximum);
+}
+
 // Reads one scalar of type T at `key`, naming the file and key on a type error. Numbers must be
 // finite: YAML's .inf and .nan mean nothing to any option (and would not be written back as YAML).
 template <typename T>
@@ -217,11 +367,11 @@ T scalar(const YAML::Node& node, const std::string& file, const std::string& key
   try {
     value = node.as<T>();
   } catch (const YAML::Exception&) {
-    throw file_error(file, "key '" + key + "' has an invalid value '" + node.Scalar() + "'");
+    throw file_error(file, "key '" + key + "' has an invalid value '" + excerpt(node.Scalar()) + "'");
   }
   if constexpr (std::is_floating_point_v<T>) {
     if (!std::isfinite(value))
-      throw file_error(file, "key '" + key + "' must be a finite number, got '" + node.Scalar() + "'");
+      throw file_error(file, "key '" + key + "' must be a finite number, got '" + excerpt(node.Scalar()) + "'");
   }
   return value;
 }
@@ -252,19 +402,32 @@ void read_member(const YAML::Node& node, const RegistrationConfigKey& key, const
         } else if constexpr (std::is_same_v<T, std::vector<double>>) {
           if (!node.IsSequence() || node.size() == 0)
             throw file_error(file, "key '" + key.path + "' must be a non-empty list of numbers");
+          if (node.size() > kMaxConfigListEntries)
+            throw file_error(file, "key '" + key.path + "' lists " + std::to_string(node.size()) + " numbers, at most " +
+                                       std::to_string(kMaxConfigListEntries) + " are allowed");
           std::vector<double> values;
-          for (const auto& item : node) values.push_back(scalar<double>(item, file, key.path));
+          for (const auto& item : node) {
+            values.push_back(scalar<double>(item, file, key.path));
+            if (outside_range(key, values.back()))
+              throw file_error(file, "key '" + key.path + "': entry " + number_text(values.back()) + " is outside its range " +
+                                         valid_range_text(key));
+          }
           for (std::size_t i = 0; i < values.size(); ++i)
             if (!(values[i] >= 0.0) || (i > 0 && values[i] <= values[i - 1]))
               throw file_error(file, "key '" + key.path + "' must be non-negative and strictly ascending");
           *target = values;
         } else {
           const T value = scalar<T>(node, file, key.path);
+          if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+            if (outside_range(key, static_cast<double>(value)))
+              throw file_error(file, "key '" + key.path + "' must lie in " + valid_range_text(key) + ", got " +
+                                         excerpt(node.Scalar()));
+          }
           if constexpr (std::is_same_v<T, std::string>) {
             if (key.choices != nullptr) {
               const std::vector<std::string> valid = key.choices();
               if (std::find(valid.begin(), valid.end(), value) == valid.end())
-                throw file_error(file, "key '" + key.path + "': unknown name '" + value + "' (expected one of: " + joined(valid) + ")");
+                throw file_error(file, "key '" + key.path + "': unknown name '" + excerpt(value) + "' (expected one of: " + joined(valid) + ")");
             }
           }
           *target = value;
@@ -348,7 +511,7 @@ void collect_keys(const YAML::Node& node, const std::string& prefix, const std::
     } else if (!registration_config_names_below(path).empty()) {
       collect_keys(entry.second, path, file, found);
     } else {
-      throw file_error(file, "unknown key '" + path + "' (known here: " + joined(registration_config_names_below(prefix)) + ")");
+      throw file_error(file, "unknown key '" + excerpt(path, 80) + "' (known here: " + joined(registration_config_names_below(prefix)) + ")");
     }
   }
 }
@@ -383,8 +546,34 @@ std::vector<std::string> registration_config_names_below(const std::string& pref
 }
 
 const std::vector<RegistrationConfigKey>& registration_config_keys() {
-  static const std::vector<RegistrationConfigKey> keys = make_registration_config_keys();
+  static const std::vector<RegistrationConfigKey> keys = [] {
+    std::vector<RegistrationConfigKey> table = make_registration_config_keys();
+    RegistrationOptions options;
+    for (RegistrationConfigKey& key : table) {
+      key.ranged = std::visit(
+          [](auto* member) {
+            using T = std::remove_pointer_t<decltype(member)>;
+            return std::is_same_v<T, int> || std::is_same_v<T, std::size_t> || std::is_same_v<T, double> ||
+                   std::is_same_v<T, std::vector<double>>;
+          },
+          key.member(options, ConfigSide::Source));
+      if (!key.ranged) continue;
+      const auto range = std::find_if(std::begin(kKeyRanges), std::end(kKeyRanges),
+                                      [&key](const KeyRange& entry) { return key.path == entry.path; });
+      // Every number has a range: a key added without one is a programming error caught by any use.
+      if (range == std::end(kKeyRanges)) throw std::logic_error("configuration key '" + key.path + "' has no valid range");
+      key.minimum = range->minimum;
+      key.maximum = range->maximum;
+      key.zero_allowed = range->zero_allowed;
+    }
+    return table;
+  }();
   return keys;
+}
+
+std::string valid_range_text(const RegistrationConfigKey& key) {
+  if (!key.ranged) return {};
+  return "[" + number_text(key.minimum) + ", " + number_text(key.maximum) + "]" + (key.zero_allowed ? " or 0" : "");
 }
 
 std::string registration_config_schema() {
@@ -403,6 +592,7 @@ std::string registration_config_schema() {
     path.resize(path_width, ' ');
     type.resize(type_width, ' ');
     text << path << "  " << type << "  " << key.description;
+    if (key.ranged) text << "; valid " << valid_range_text(key);
     if (key.choices != nullptr) text << "; one of " << joined(key.choices(), "|");
     text << "\n";
   }
@@ -412,13 +602,24 @@ std::string registration_config_schema() {
 void apply_registration_config(const std::string& path, RegistrationOptions& options, const std::string& side) {
   if (side != "both" && side != "source" && side != "target")
     throw Error("apply_registration_config: side must be both, source or target, got '" + side + "'");
+  // Only a regular file of bounded size is parsed: a FIFO would block the reader, and a 100 MB
+  // YAML list took 4.3 GB as nodes.
+  std::error_code code;
+  const std::filesystem::file_status status = std::filesystem::status(path, code);
+  if (code || !std::filesystem::exists(status)) throw file_error(path, "cannot open the configuration file");
+  if (!std::filesystem::is_regular_file(status))
+    throw file_error(path, "the configuration is not a regular file (a directory, FIFO or device)");
+  const std::uintmax_t bytes = std::filesystem::file_size(path, code);
+  if (code || bytes > kMaxConfigFileBytes)
+    throw file_error(path, "the configuration file holds " + std::to_string(bytes) + " bytes, more than the " +
+                               std::to_string(kMaxConfigFileBytes) + " a configuration may have");
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
   } catch (const YAML::BadFile&) {
     throw file_error(path, "cannot open the configuration file");
   } catch (const YAML::Exception& error) {
-    throw file_error(path, std::string("invalid YAML: ") + error.what());
+    throw file_error(path, "invalid YAML: " + excerpt(error.what(), 200));
   }
   if (root.IsNull()) return;  // an empty file changes nothing
   if (!root.IsMap()) throw file_error(path, "the configuration must be a mapping of sections");
@@ -471,6 +672,24 @@ void apply_registration_config(const std::string& path, RegistrationOptions& opt
   } catch (const Error& error) {
     throw file_error(path, error.what());
   }
+}
+
+std::vector<std::string> switched_off_checks(const RegistrationOptions& options) {
+  const AmbiguityOptions& a = options.ambiguity;
+  std::vector<std::string> off;
+  const auto note = [&off](bool is_off, const char* key, double value, const char* rule, const char* check) {
+    if (is_off) off.push_back(std::string(key) + " " + number_text(value) + " (" + rule + "): " + check + " is off");
+  };
+  note(a.overlap_margin < 0.0, "ambiguity.overlap_margin", a.overlap_margin, "< 0", "the check against not moving");
+  note(a.minimum_overlap == 0.0, "ambiguity.minimum_overlap", a.minimum_overlap, "0", "the overlap floor");
+  note(a.confirm_below == 0.0, "ambiguity.confirm_below", a.confirm_below, "0", "the dense search's confirmation of low overlaps");
+  note(a.confirm_over_identity == 0.0, "ambiguity.confirm_over_identity", a.confirm_over_identity, "0",
+       "the dense search's confirmation of answers barely beating not moving");
+  note(a.half_turn_margin < 0.0, "ambiguity.half_turn_margin", a.half_turn_margin, "< 0", "the half-turn check");
+  note(a.free_space_limit < 0.0, "ambiguity.free_space_limit", a.free_space_limit, "< 0", "the free-space check");
+  note(a.ground_tilt_limit_degrees < 0.0, "ambiguity.ground_tilt_limit_deg", a.ground_tilt_limit_degrees, "< 0",
+       "the ground-tilt check");
+  return off;
 }
 
 std::string registration_config_yaml(const RegistrationOptions& options, const std::string& side) {

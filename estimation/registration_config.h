@@ -42,7 +42,21 @@ struct RegistrationConfigKey {
   bool per_side = false;    ///< an extraction key: set on the source, the target or both (`side` of apply_registration_config)
   RegistrationConfigMember (*member)(RegistrationOptions& options, ConfigSide side) = nullptr;  ///< the member it reaches (`side` used by per-side keys)
   std::vector<std::string> (*choices)() = nullptr;  ///< the valid names of a string key (nullptr: any string)
+  double minimum = 0.0;   ///< smallest valid value of a number, an integer or each list entry (valid_range_text says why)
+  double maximum = 0.0;   ///< largest valid value of a number, an integer or each list entry; bounds every amount of work
+  bool zero_allowed = false;  ///< 0 is also valid (the key's documented "0: off") though below `minimum`
+  bool ranged = false;    ///< a number, an integer or a list of numbers: minimum..maximum apply (bools, names and [x, y, z] have none)
 };
+
+/// "[minimum, maximum]" of a ranged key (with "or 0" when zero_allowed); empty for other keys.
+std::string valid_range_text(const RegistrationConfigKey& key);
+
+/// Most entries of a list key (matching.thresholds: one clique search per entry).
+inline constexpr std::size_t kMaxConfigListEntries = 8;
+
+/// Largest configuration file read, bytes: a full configuration is about 6 kB, and a bigger file is
+/// refused before it is parsed (a 100 MB YAML list would take gigabytes to hold as nodes).
+inline constexpr std::size_t kMaxConfigFileBytes = 1 << 20;
 
 /// Every key of the YAML configuration, in the order registration_config_yaml writes them
 /// (`sensor` first: reading it restarts the extraction from that preset before the other keys).
@@ -64,9 +78,17 @@ std::string registration_config_schema();
 /// or "target". `sensor` restarts that extraction from extraction_preset first; `extraction.up`
 /// is normalised (non-zero); `matching.thresholds` is a non-empty, non-negative, strictly ascending
 /// list; string keys with choices must name one of them; the dense_search block must pass
-/// validate_dense_search_options. Throws quadrix::Error naming the file and the key for unknown
-/// keys, wrong types, out-of-range values or unreadable files.
+/// validate_dense_search_options; every number, integer and list entry must lie in its key's range
+/// (RegistrationConfigKey::minimum..maximum, printed by registration_config_schema). Throws
+/// quadrix::Error naming the file and the key for unknown keys, wrong types, out-of-range values,
+/// unreadable files, files that are not regular files (a FIFO would block) or larger than
+/// kMaxConfigFileBytes; quoted values are cut to a few dozen characters.
 void apply_registration_config(const std::string& path, RegistrationOptions& options, const std::string& side = "both");
+
+/// The checks of the `ok` verification that `options` switch off through their documented off
+/// values (a negative margin or limit, a zero floor), one line each naming the key, e.g.
+/// "ambiguity.free_space_limit -1 (< 0): the free-space check is off"; empty when every check runs.
+std::vector<std::string> switched_off_checks(const RegistrationOptions& options);
 
 /// Every key of registration_config_keys with its value in `options` (per-side keys from `side`:
 /// "source" or "target") as YAML a user can save, edit and pass back with --config; applying it

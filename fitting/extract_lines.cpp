@@ -179,7 +179,9 @@ double stem_radius_across_view(const Eigen::Matrix3Xd& points, const std::vector
   slice_and_offset.reserve(stem.size());
   for (const std::uint32_t index : stem) {
     const Eigen::Vector3d d = points.col(index) - centre;
-    slice_and_offset.emplace_back(static_cast<long>(std::floor(d.dot(axis) / options.slice_height)), d.dot(across));
+    // Clamped before the cast: a slice index beyond a long would be undefined behaviour.
+    const double slice = std::clamp(std::floor(d.dot(axis) / options.slice_height), -1e15, 1e15);
+    slice_and_offset.emplace_back(static_cast<long>(slice), d.dot(across));
   }
   std::sort(slice_and_offset.begin(), slice_and_offset.end());
   std::vector<double> half_widths;
@@ -193,8 +195,9 @@ double stem_radius_across_view(const Eigen::Matrix3Xd& points, const std::vector
     if (static_cast<int>(end - begin) >= options.crownless_slice_points) half_widths.push_back(0.5 * (highest - lowest));
     begin = end;
   }
-  const std::size_t needed = static_cast<std::size_t>(std::max(1.0, std::ceil(options.minimum_height / options.slice_height - 1e-9)));
-  if (half_widths.size() < needed) return -1.0;
+  // Compared as doubles: a minimum height of 5e18 m asks for more slices than a size_t holds.
+  const double needed = std::max(1.0, std::ceil(options.minimum_height / options.slice_height - 1e-9));
+  if (!(static_cast<double>(half_widths.size()) >= needed)) return -1.0;
   std::sort(half_widths.begin(), half_widths.end());
   return half_widths[half_widths.size() / 4];
 }

@@ -101,7 +101,10 @@ Eigen::Isometry3d read_kitti_calibration(const std::string& path);
 Eigen::Isometry3d read_kitti_calibration(const std::string& path, int sequence);
 
 /// Writes a file through `write` into a temporary file beside `path`, then renames it over `path`.
-/// On any exception the temporary is removed and the original file is untouched.
+/// On any exception the temporary is removed and the original file is untouched; so is it when a
+/// signal remove_on_signals (geometry/removed_on_signal.h) handles ends the process. Only a regular
+/// file (or nothing) is replaced: a directory, FIFO, device or socket at `path`, or a symlink to one
+/// or to nothing, is an Error; a symlink to a regular file has that file replaced (the link stays).
 void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
 
 }  // namespace quadrix

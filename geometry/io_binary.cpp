@@ -14,11 +14,14 @@ namespace {
 // Reads fixed-size float32 records (x, y, z, intensity[, ring]) with one pass over the bytes.
 PointCloud read_float_records(const std::string& path, std::size_t floats_per_point, const char* layout,
                               const CloudReadOptions& options, CloudReadReport& report) {
-  const FileBytes bytes = read_file_bytes(path);
   const std::size_t record = floats_per_point * sizeof(float);
-  if (bytes.size % record != 0)
-    throw file_error(path, "size " + std::to_string(bytes.size) + " bytes is not a multiple of " +
+  // The size is checked before any byte is read (a wrong file can be gigabytes).
+  const std::size_t size = regular_file_size(path);
+  if (size % record != 0)
+    throw file_error(path, "size " + std::to_string(size) + " bytes is not a multiple of " +
                                std::to_string(record) + " (" + layout + "); truncated or not this format");
+  const FileBytes bytes = read_file_bytes(path);
+  if (bytes.size % record != 0) throw file_error(path, "the file changed size while it was read");
   const std::size_t rows = bytes.size / record;
   PointCloud cloud;
   cloud.positions.resize(3, static_cast<Eigen::Index>(rows));

@@ -1,6 +1,7 @@
 // Format selection, the shared column -> PointCloud assembly, atomic writing and text helpers.
 #include "geometry/io.h"
 #include "geometry/io_internal.h"
+#include "geometry/removed_on_signal.h"
 
 #include <algorithm>
 #include <atomic>
@@ -15,6 +16,8 @@
 #include <limits>
 
 #include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace quadrix {
@@ -86,8 +89,14 @@ std::uint8_t to_color_channel(double value, bool scale_unit_range) {
 FileBytes read_file_bytes(const std::string& path) {
   std::error_code code;
   if (std::filesystem::is_directory(path, code)) throw file_error(path, "is a directory, expected a file");
-  const int descriptor = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // Opened without blocking: opening a FIFO that has no writer would wait forever.
+  const int descriptor = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (descriptor < 0) throw file_error(path, std::string("cannot open: ") + std::strerror(errno));
+  struct stat status {};
+  if (::fstat(descriptor, &status) != 0 || !S_ISREG(status.st_mode)) {
+    ::close(descriptor);
+    throw file_error(path, "is not a regular file (a FIFO, device or socket): refused");
+  }
   const off_t end = ::lseek(descriptor, 0, SEEK_END);
   if (end < 0 || ::lseek(descriptor, 0, SEEK_SET) < 0) {
     ::close(descriptor);
@@ -109,6 +118,14 @@ FileBytes read_file_bytes(const std::string& path) {
   }
   ::close(descriptor);
   return bytes;
+}
+
+std::size_t regular_file_size(const std::string& path) {
+  struct stat status {};
+  if (::stat(path.c_str(), &status) != 0) throw file_error(path, std::string("cannot open: ") + std::strerror(errno));
+  if (S_ISDIR(status.st_mode)) throw file_error(path, "is a directory, expected a file");
+  if (!S_ISREG(status.st_mode)) throw file_error(path, "is not a regular file (a FIFO, device or socket): refused");
+  return static_cast<std::size_t>(status.st_size);
 }
 
 std::size_t scalar_size(ScalarType type) {
@@ -461,17 +478,93 @@ void write_point_cloud(const std::string& path, const PointCloud& cloud, const C
   throw file_error(path, "writing format '" + cloud_format_name(format) + "' is not supported; write .ply or .pcd");
 }
 
+namespace {
+
+// Paths removed when a handled signal ends the process: fixed storage, so the handler reads them
+// without allocating. A slot is free (0), being filled (1) or live (2).
+constexpr int kRemovalSlots = 256;
+constexpr std::size_t kRemovalPathBytes = 4096;
+char removal_paths[kRemovalSlots][kRemovalPathBytes];
+std::atomic<int> removal_state[kRemovalSlots];
+std::atomic<long> removal_order[kRemovalSlots];
+std::atomic<long> removal_counter{0};
+
+// Removes every live path, newest first (files before the folder holding them), with only
+// async-signal-safe calls, then ends the process by the same signal with its default action.
+extern "C" void remove_tracked_paths_and_exit(int signal_number) {
+  bool removed[kRemovalSlots] = {};
+  for (int round = 0; round < kRemovalSlots; ++round) {
+    int newest = -1;
+    long newest_order = -1;
+    for (int slot = 0; slot < kRemovalSlots; ++slot)
+      if (!removed[slot] && removal_state[slot].load() == 2 && removal_order[slot].load() > newest_order) {
+        newest = slot;
+        newest_order = removal_order[slot].load();
+      }
+    if (newest < 0) break;
+    removed[newest] = true;
+    if (::unlink(removal_paths[newest]) != 0) ::rmdir(removal_paths[newest]);
+  }
+  ::signal(signal_number, SIG_DFL);
+  ::raise(signal_number);
+}
+
+// The path a write to `path` replaces: `path` itself, or the regular file a symlink leads to.
+// Error for anything but a regular file or nothing.
+std::filesystem::path replaced_path(const std::string& path) {
+  const std::filesystem::path target(path);
+  std::error_code code;
+  const std::filesystem::file_status link = std::filesystem::symlink_status(target, code);
+  if (code || !std::filesystem::exists(link)) return target;
+  if (std::filesystem::is_symlink(link)) {
+    const std::filesystem::file_status pointed = std::filesystem::status(target, code);
+    if (code || !std::filesystem::is_regular_file(pointed))
+      throw file_error(path, "cannot write: it is a symlink to something other than a regular file");
+    return std::filesystem::canonical(target);
+  }
+  if (std::filesystem::is_directory(link)) throw file_error(path, "cannot write: it is a directory");
+  if (!std::filesystem::is_regular_file(link))
+    throw file_error(path, "cannot write: it is not a regular file (a device, FIFO or socket); refused");
+  return target;
+}
+
+}  // namespace
+
+RemovedOnSignal::RemovedOnSignal(const std::string& path) {
+  if (path.empty() || path.size() >= kRemovalPathBytes) return;
+  for (int slot = 0; slot < kRemovalSlots; ++slot) {
+    int expected = 0;
+    if (!removal_state[slot].compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(removal_paths[slot], path.c_str(), path.size() + 1);
+    removal_order[slot].store(removal_counter.fetch_add(1) + 1);
+    removal_state[slot].store(2);
+    slot_ = slot;
+    return;
+  }
+}
+
+RemovedOnSignal::~RemovedOnSignal() {
+  if (slot_ >= 0) removal_state[slot_].store(0);
+}
+
+void remove_on_signals() {
+  struct sigaction action {};
+  action.sa_handler = remove_tracked_paths_and_exit;
+  sigemptyset(&action.sa_mask);
+  for (const int signal_number : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(signal_number, &action, nullptr);
+}
+
 void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
   static std::atomic<unsigned> counter{0};
-  const std::filesystem::path target(path);
+  const std::filesystem::path target = replaced_path(path);
   const std::filesystem::path directory = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
   std::error_code code;
   if (!std::filesystem::is_directory(directory, code))
     throw file_error(path, "cannot write: directory '" + directory.string() + "' does not exist");
-  if (std::filesystem::is_directory(target, code)) throw file_error(path, "cannot write: it is a directory");
   const std::string temporary = (directory / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()) +
                                               "-" + std::to_string(counter.fetch_add(1))))
                                     .string();
+  const RemovedOnSignal removed_if_interrupted(temporary);
   try {
     {
       std::ofstream stream(temporary, std::ios::binary | std::ios::trunc);
@@ -488,7 +581,8 @@ void write_file_atomically(const std::string& path, const std::function<void(std
       ::close(descriptor);
       if (synced != 0) throw file_error(path, std::string("fsync failed: ") + std::strerror(errno));
     }
-    if (std::rename(temporary.c_str(), path.c_str()) != 0)
+    replaced_path(path);  // still a regular file or nothing (a FIFO made meanwhile is not replaced)
+    if (std::rename(temporary.c_str(), target.c_str()) != 0)
       throw file_error(path, std::string("cannot rename the temporary file over the target: ") + std::strerror(errno));
   } catch (...) {
     std::remove(temporary.c_str());

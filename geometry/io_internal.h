@@ -21,8 +21,13 @@ struct FileBytes {
   std::string_view view() const { return {data.get(), size}; }
 };
 
-/// Reads `path` completely; Error naming the file when it cannot be opened or read.
+/// Reads `path` completely; Error naming the file when it cannot be opened or read, or is not a
+/// regular file (a FIFO or a device would block or never end).
 FileBytes read_file_bytes(const std::string& path);
+
+/// The size of the regular file `path` in bytes, before any of it is read; Error naming the file
+/// when it does not exist or is not a regular file.
+std::size_t regular_file_size(const std::string& path);
 
 /// Scalar storage types of binary formats.
 enum class ScalarType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float32, Float64 };

@@ -47,7 +47,8 @@ void parse_numbers(const std::string& path, std::size_t line_number, const std::
   for (std::size_t k = first; k < tokens.size(); ++k) {
     double value = 0;
     if (!io_internal::parse_double(tokens[k], value))
-      throw file_error(path, "line " + std::to_string(line_number) + ": '" + std::string(tokens[k]) + "' is not a number");
+      throw file_error(path, "line " + std::to_string(line_number) + ": '" + std::string(tokens[k].substr(0, 40)) +
+                                 (tokens[k].size() > 40 ? "...'" : "'") + " is not a number");
     numbers.push_back(value);
   }
 }
@@ -84,7 +85,11 @@ Eigen::Isometry3d read_pose_matrix(const std::string& path) {
     if (numbers.size() + tokens.size() > 16)
       throw file_error(path, "line " + std::to_string(lines.line_number()) +
                                  ": more than 16 numbers (expected a 4x4 or 3x4 row-major matrix)");
+    const std::size_t first_of_line = numbers.size();
     parse_numbers(path, lines.line_number(), tokens, 0, numbers);
+    for (std::size_t k = first_of_line; k < numbers.size(); ++k)
+      if (!std::isfinite(numbers[k]))
+        throw file_error(path, "line " + std::to_string(lines.line_number()) + ": the matrix has a non-finite entry (NaN/inf)");
     last_line = lines.line_number();
   }
   if (numbers.size() != 16 && numbers.size() != 12)

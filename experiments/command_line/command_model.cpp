@@ -4,6 +4,7 @@
 // the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose)
 // (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling"). Beside model.json it writes the
 // interactive page model.html (quadrix view) unless --no-page.
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/reports/interactive_page.h"
 #include "experiments/reports/model_picture.h"
@@ -135,9 +136,10 @@ PointCloud read_merged_clouds(const ModelCommandOptions& options, const CloudRea
   std::size_t total = 0;
   for (std::size_t i = 0; i < options.inputs.size(); ++i) {
     clouds.push_back(read_point_cloud(options.inputs[i], read_options));
-    const Eigen::Isometry3f pose = read_pose_matrix(options.poses[i]).cast<float>();
+    const Eigen::Isometry3d pose = read_pose_matrix(options.poses[i]);
     for (Eigen::Index column = 0; column < clouds.back().positions.cols(); ++column)
-      clouds.back().positions.col(column) = pose * Eigen::Vector3f(clouds.back().positions.col(column));
+      clouds.back().positions.col(column) = (pose * clouds.back().positions.col(column).cast<double>()).cast<float>();
+    require_finite_points(clouds.back(), "--poses " + options.poses[i] + " moved " + options.inputs[i]);
     total += clouds.back().size();
   }
   PointCloud merged;
@@ -229,6 +231,15 @@ void write_mesh_outputs(const ModelCommandOptions& options, const ModellingResul
   write_mesh_picture(options.picture, mesh, view);
 }
 
+// Where the interactive page goes: beside the JSON (model.json -> model.html), never the JSON's own
+// path; "" with --no-page.
+std::string model_page_path(const ModelCommandOptions& options) {
+  if (options.no_page) return "";
+  const std::filesystem::path json_path(options.out);
+  return json_path.extension() == ".json" ? std::filesystem::path(json_path).replace_extension(".html").string()
+                                          : options.out + ".html";
+}
+
 // The interactive page beside the JSON (model.json -> model.html), with the same extents as --mesh.
 // Returns its path, or "" when skipped or not buildable (libjs-three missing: a warning only, since
 // the model is written).
@@ -236,10 +247,7 @@ std::string write_model_page(const ModelCommandOptions& options, const Modelling
                              const ModellingResult& result, const PointCloud& cloud, const Eigen::Matrix3Xd& points) {
   if (options.no_page) return "";
   const SceneModel& model = result.model;
-  const std::filesystem::path json_path(options.out);
-  const std::string page_path = json_path.extension() == ".json"
-                                    ? std::filesystem::path(json_path).replace_extension(".html").string()
-                                    : options.out + ".html";  // never the JSON's own path
+  const std::string page_path = model_page_path(options);
   ModelPageInput page;
   page.title = std::filesystem::path(options.inputs.front()).filename().string() +
                (options.inputs.size() > 1 ? " + " + std::to_string(options.inputs.size() - 1) + " more" : "");
@@ -318,6 +326,24 @@ void run(const ModelCommandOptions& options) {
   ModellingOptions modelling = registration_preset(options.preset).modelling;
   if (!options.fitter.empty()) modelling.fitter = options.fitter;
   make_quadric_fitter(modelling.fitter);  // fail early with the list of fitters
+  // A picture's camera needs numbers: inf would draw nothing.
+  if (!std::isfinite(options.view_azimuth_deg)) throw Error("--view-azimuth: expected a finite angle in degrees");
+  if (!(options.view_elevation_deg >= -89.0 && options.view_elevation_deg <= 89.0))
+    throw Error("--view-elevation: expected an angle in [-89, 89] degrees");
+  if (!(options.view_zoom > 0.0 && options.view_zoom <= 1e3)) throw Error("--view-zoom: expected a zoom in (0, 1000]");
+  // Every output is checked before the work: none replaces an input, another output or anything
+  // but a regular file, and each can be written.
+  std::vector<std::string> inputs = options.inputs;
+  inputs.insert(inputs.end(), options.poses.begin(), options.poses.end());
+  inputs.push_back(options.labels);
+  inputs.push_back(options.score_labels);
+  check_outputs({{"--out", options.out},
+                 {"--binary", options.binary},
+                 {"--mesh", options.mesh},
+                 {"--elements", options.elements},
+                 {"--picture", options.picture},
+                 {"the page beside --out (--no-page skips it)", model_page_path(options)}},
+                inputs);
 
   CloudReadOptions read_options;
   read_options.format = cloud_format_from_name(options.format);
@@ -330,6 +356,7 @@ void run(const ModelCommandOptions& options) {
   // A cloud in a map's frame is modelled centred on its sensor (the extraction measures ranges and
   // heights from the origin), and the model is moved back: every output is in the file's frame.
   const PointCloud centred_cloud = centred ? centred_on_sensor(cloud, sensor_origin) : PointCloud();
+  if (centred) require_finite_points(centred_cloud, "--sensor-origin moved " + options.inputs.front());
   const PointCloud& modelled = centred ? centred_cloud : cloud;
   std::vector<std::uint32_t> labels;
   if (!options.labels.empty()) {

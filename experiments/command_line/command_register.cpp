@@ -11,6 +11,7 @@
 // (source_model.json, target_model.json) and the interactive page view.html (unless --no-page).
 // The exit status is 0 whenever a registration ran (its status says ok / ambiguous / degenerate /
 // failed); 2 on bad input (unreadable file, unknown preset or config key).
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "estimation/registration_config.h"
 #include "experiments/reports/interactive_page.h"
@@ -61,6 +62,15 @@ void run(const RegisterCommandOptions& options) {
   const Eigen::Vector3d target_origin(options.target_origin.data());
   if (!source_origin.allFinite()) throw Error("--source-origin: expected three finite numbers X,Y,Z in metres");
   if (!target_origin.allFinite()) throw Error("--target-origin: expected three finite numbers X,Y,Z in metres");
+  // The output folder is checked before the work, and replaced at once after it.
+  const std::vector<std::string> inputs = {options.source,        options.target,        options.config,
+                                           options.ground_truth,  options.labels_source, options.labels_target};
+  std::optional<FolderReplacement> output_folder;
+  if (!options.out.empty())
+    output_folder.emplace("--out", options.out,
+                          std::vector<std::string>{"report.json", "merged.ply", "bev.png", "source_model.json",
+                                                   "target_model.json", "view.html"},
+                          inputs);
   std::optional<Eigen::Isometry3d> ground_truth;
   if (!options.ground_truth.empty())
     ground_truth = between_sensor_frames(read_pose_matrix(options.ground_truth), source_origin, target_origin);
@@ -72,6 +82,8 @@ void run(const RegisterCommandOptions& options) {
   const Clock::time_point start = Clock::now();
   const PointCloud source = centred_on_sensor(read_point_cloud(options.source), source_origin);
   const PointCloud target = centred_on_sensor(read_point_cloud(options.target), target_origin);
+  require_finite_points(source, "--source-origin moved " + options.source);
+  require_finite_points(target, "--target-origin moved " + options.target);
   std::vector<std::uint32_t> source_labels;
   std::vector<std::uint32_t> target_labels;
   if (!options.labels_source.empty()) source_labels = read_semantic_kitti_labels(options.labels_source, source.size());
@@ -104,6 +116,7 @@ void run(const RegisterCommandOptions& options) {
   std::printf("quadrix register %s -> %s  (presets: source %s, target %s)\n", options.source.c_str(), options.target.c_str(),
               registration.source_extraction.preset.c_str(), registration.target_extraction.preset.c_str());
   if (!notes.empty()) std::printf("%s\n", notes.c_str());
+  for (const std::string& check : switched_off_checks(registration)) std::printf("note: %s\n", check.c_str());
   const Eigen::Matrix4d matrix = between_cloud_frames(result.transform, source_origin, target_origin).matrix();
   for (int r = 0; r < 4; ++r)
     std::printf("%12.6f %12.6f %12.6f %12.6f\n", matrix(r, 0), matrix(r, 1), matrix(r, 2), matrix(r, 3));
@@ -136,8 +149,7 @@ void run(const RegisterCommandOptions& options) {
   std::printf("\n");
   if (!result.message.empty()) std::printf("%s\n", result.message.c_str());
 
-  if (!options.out.empty()) {
-    std::filesystem::create_directories(options.out);
+  if (output_folder) {
     RegistrationReportContext context;
     context.source_path = options.source;
     context.target_path = options.target;
@@ -150,15 +162,15 @@ void run(const RegisterCommandOptions& options) {
     context.overlap = overlap;
     context.source_sensor_origin = source_origin;
     context.target_sensor_origin = target_origin;
-    const std::filesystem::path folder(options.out);
-    write_registration_report((folder / "report.json").string(), result, context);
+    FolderReplacement& folder = *output_folder;
+    write_registration_report(folder.path("report.json"), result, context);
     // merged.ply in the target file's frame; the picture, the models and the page stay sensor-centred.
-    write_point_cloud((folder / "merged.ply").string(),
+    write_point_cloud(folder.path("merged.ply"),
                       centred_on_sensor(merge_aligned_clouds(source, target, result.transform), -target_origin));
-    write_birds_eye_png((folder / "bev.png").string(), source, target, result.transform);
+    write_birds_eye_png(folder.path("bev.png"), source, target, result.transform);
     // The models, so `quadrix view DIR` can draw the clique's correspondences between record centres.
-    write_scene_model_json((folder / "source_model.json").string(), result.source_model);
-    write_scene_model_json((folder / "target_model.json").string(), result.target_model);
+    write_scene_model_json(folder.path("source_model.json"), result.source_model);
+    write_scene_model_json(folder.path("target_model.json"), result.target_model);
     std::string page;
     if (!options.no_page) {
       RegistrationPageInput page_input;
@@ -170,12 +182,13 @@ void run(const RegisterCommandOptions& options) {
       // The registration's own outputs are written: a page that cannot be built (libjs-three
       // missing) is a warning, not a failed run.
       try {
-        write_page((folder / "view.html").string(), registration_page_html(page_input));
+        write_page(folder.path("view.html"), registration_page_html(page_input));
         page = ", view.html";
       } catch (const Error& error) {
         std::fprintf(stderr, "quadrix: warning: view.html not written: %s (--no-page skips it)\n", error.what());
       }
     }
+    folder.commit();
     std::printf("wrote %s/{report.json, merged.ply, bev.png, source_model.json, target_model.json%s}\n", options.out.c_str(),
                 page.c_str());
   }

@@ -2,9 +2,12 @@
 // `quadrix register --out` folder (registration page), a `quadrix model` JSON file or a
 // `quadrix synth` folder (model pages). One self-contained HTML file: three.js from Debian's
 // libjs-three and the data are inlined, so it opens from disk without a network.
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/reports/interactive_page.h"
 #include "geometry/error.h"
+
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -20,10 +23,10 @@ struct ViewCommandOptions {
   std::size_t point_budget = 400000; ///< most points written into the page
 };
 
-void run(const ViewCommandOptions& options) {
+// The page of `options.input` and what kind it is.
+std::string page_of(const ViewCommandOptions& options, std::string& kind) {
   const std::filesystem::path input(options.input);
   std::string html;
-  std::string kind;
   if (std::filesystem::is_directory(input) && std::filesystem::exists(input / "report.json")) {
     RegistrationPageInput page = read_registration_folder(options.input);
     page.point_budget = options.point_budget;
@@ -43,6 +46,25 @@ void run(const ViewCommandOptions& options) {
     throw file_error(options.input,
                      "expected a `quadrix register --out` folder (report.json), a `quadrix synth` folder (scene.json) "
                      "or a `quadrix model` JSON file");
+  }
+  return html;
+}
+
+void run(const ViewCommandOptions& options) {
+  // The page never replaces what it shows: the input file, or a data file of the input folder.
+  std::vector<std::string> inputs{options.input};
+  std::error_code code;
+  if (std::filesystem::is_directory(options.input, code))
+    for (const std::filesystem::directory_entry& entry : std::filesystem::directory_iterator(options.input, code))
+      if (entry.path().extension() != ".html") inputs.push_back(entry.path().string());
+  check_outputs({{"--out", options.out}}, inputs);
+  std::string kind;
+  std::string html;
+  try {
+    html = page_of(options, kind);
+  } catch (const nlohmann::json::exception& error) {
+    // A file of the wrong shape (a string where a number belongs) is bad input, not a fault.
+    throw file_error(options.input, std::string("a JSON file holds a value of the wrong type or form: ") + error.what());
   }
   write_page(options.out, html);
   std::printf("wrote %s (%s page, %.1f MB)\n", options.out.c_str(), kind.c_str(), static_cast<double>(html.size()) / 1e6);

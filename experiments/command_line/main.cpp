@@ -1,12 +1,15 @@
 // `quadrix`: the command line. Subcommands live in command_*.cpp and register themselves.
 #include "experiments/command_line/command_registry.h"
 #include "geometry/error.h"
+#include "geometry/removed_on_signal.h"
 
 #include <malloc.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -46,6 +49,15 @@ void keep_freed_memory_for_reuse() {
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
 }
 
+// `message` cut to at most 1,000 characters (its start and its end kept): a value quoted from a
+// file (a 100 MB token) is not echoed whole.
+std::string bounded(const std::string& message) {
+  constexpr std::size_t kHead = 640, kTail = 320;
+  if (message.size() <= kHead + kTail + 40) return message;
+  return message.substr(0, kHead) + " ... (" + std::to_string(message.size() - kHead - kTail) +
+         " characters left out) ... " + message.substr(message.size() - kTail);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -54,15 +66,22 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "quadrix 0.1.0");
   quadrix::cli::add_registered_commands(app);
+  quadrix::remove_on_signals();  // an interrupted command leaves no temporary file behind
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
-    return app.exit(error);
+    // --help and --version end here with 0; every usage error is a usage error: 2 (CLI11's own
+    // codes, 105-114, would read as something else).
+    return app.exit(error) == 0 ? 0 : 2;
   } catch (const quadrix::Error& error) {
-    std::fprintf(stderr, "quadrix: error: %s\n", error.what());
+    std::fprintf(stderr, "quadrix: error: %s\n", bounded(error.what()).c_str());
+    return 2;
+  } catch (const std::filesystem::filesystem_error& error) {
+    // A path the system refused (permission, a full or read-only disk): the user's to fix, not a fault.
+    std::fprintf(stderr, "quadrix: error: %s\n", bounded(error.what()).c_str());
     return 2;
   } catch (const std::exception& error) {
-    std::fprintf(stderr, "quadrix: internal error: %s\n", error.what());
+    std::fprintf(stderr, "quadrix: internal error: %s\n", bounded(error.what()).c_str());
     return 3;
   }
   return 0;

@@ -41,7 +41,8 @@ std::string write_text(const std::filesystem::path& path, const std::string& tex
 }
 
 // Sets the member of `key` (of `side` for per-side keys) to a valid value different from its
-// current one: bools flipped, numbers changed, another valid name, another list or axis.
+// current one: bools flipped, numbers changed within the key's range, another valid name, another
+// list or axis.
 void change_member(const RegistrationConfigKey& key, RegistrationOptions& options, ConfigSide side) {
   std::visit(
       [&key](auto* value) {
@@ -49,9 +50,11 @@ void change_member(const RegistrationConfigKey& key, RegistrationOptions& option
         if constexpr (std::is_same_v<T, bool>) {
           *value = !*value;
         } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::size_t>) {
-          *value += 1;
+          if (static_cast<double>(*value) + 1.0 <= key.maximum) *value += 1;
+          else *value -= 1;
         } else if constexpr (std::is_same_v<T, double>) {
-          *value += 0.125;
+          if (*value + 0.125 <= key.maximum) *value += 0.125;
+          else *value -= 0.125;
         } else if constexpr (std::is_same_v<T, std::string>) {
           ASSERT_NE(key.choices, nullptr) << key.path << ": a string key without choices needs a value here";
           const std::vector<std::string> choices = key.choices();
@@ -231,14 +234,14 @@ TEST(RegistrationConfig, OverridesApplyPerSideAndUnknownKeysNameKeyAndFile) {
   expect_error_naming("short_up.yaml", "extraction:\n  up: [0, 1]\n", "'extraction.up'");
   expect_error_naming("scalar_section.yaml", "extraction:\n  planes: 3\n", "'extraction.planes'");
   expect_error_naming("list_for_number.yaml", "selection:\n  dcs_phi: [1, 2]\n", "'selection.dcs_phi'");
-  expect_error_naming("negative_isolation.yaml", "extraction:\n  isolation_cell: -0.3\n", "extraction.isolation_cell must be a length >= 0");
-  expect_error_naming("no_neighbours.yaml", "extraction:\n  isolation_neighbours: 0\n", "extraction.isolation_neighbours must be at least 1");
-  expect_error_naming("no_check_neighbours.yaml", "ambiguity:\n  isolation_neighbours: 0\n", "ambiguity.isolation_neighbours must be at least 1");
-  expect_error_naming("low_free_space.yaml", "ambiguity:\n  free_space_height: -1\n", "ambiguity.free_space_height must be a height >= 0");
+  expect_error_naming("negative_isolation.yaml", "extraction:\n  isolation_cell: -0.3\n", "'extraction.isolation_cell' must lie in [0.01, 100] or 0");
+  expect_error_naming("no_neighbours.yaml", "extraction:\n  isolation_neighbours: 0\n", "'extraction.isolation_neighbours' must lie in [1, 1000]");
+  expect_error_naming("no_check_neighbours.yaml", "ambiguity:\n  isolation_neighbours: 0\n", "'ambiguity.isolation_neighbours' must lie in [1, 1000]");
+  expect_error_naming("low_free_space.yaml", "ambiguity:\n  free_space_height: -1\n", "'ambiguity.free_space_height' must lie in [0, 100]");
   expect_error_naming("nan_ground_tilt.yaml", "ambiguity:\n  ground_tilt_limit_deg: .nan\n", "ambiguity.ground_tilt_limit_deg' must be a finite number");
   expect_error_naming("nan_free_space.yaml", "ambiguity:\n  free_space_limit: .nan\n", "key 'ambiguity.free_space_limit' must be a finite number");
-  expect_error_naming("no_lever_arm.yaml", "estimation:\n  level_ground_lever_arm_m: 0\n", "estimation.level_ground_lever_arm_m must be a length > 0");
-  expect_error_naming("gain_above_one.yaml", "ambiguity:\n  confirm_over_identity: 1.5\n", "ambiguity.confirm_over_identity must be a fraction in [0, 1]");
+  expect_error_naming("no_lever_arm.yaml", "estimation:\n  level_ground_lever_arm_m: 0\n", "'estimation.level_ground_lever_arm_m' must lie in [0.001, ");
+  expect_error_naming("gain_above_one.yaml", "ambiguity:\n  confirm_over_identity: 1.5\n", "'ambiguity.confirm_over_identity' must lie in [0, 1]");
   RegistrationOptions ignored;
   EXPECT_THROW(apply_registration_config((folder / "missing.yaml").string(), ignored), Error);
   EXPECT_THROW(registration_preset("hdl999"), Error);

@@ -1,0 +1,209 @@
+// Output checks and whole-folder replacement of `quadrix` commands (see command_outputs.h).
+#include "experiments/command_line/command_outputs.h"
+
+#include "geometry/error.h"
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fcntl.h>
+#include <filesystem>
+#include <optional>
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <utility>
+
+namespace quadrix::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// What identifies a file: device and inode when it exists, else its canonical path.
+struct Identity {
+  bool exists = false;
+  dev_t device = 0;
+  ino_t inode = 0;
+  std::string canonical;
+  bool operator==(const Identity& other) const {
+    return exists && other.exists ? device == other.device && inode == other.inode : canonical == other.canonical;
+  }
+};
+
+Identity identity_of(const std::string& path) {
+  Identity identity;
+  std::error_code code;
+  identity.canonical = fs::weakly_canonical(fs::absolute(path, code), code).string();
+  struct stat status {};
+  if (::stat(path.c_str(), &status) == 0) {
+    identity.exists = true;
+    identity.device = status.st_dev;
+    identity.inode = status.st_ino;
+  }
+  return identity;
+}
+
+// The system folders no output belongs in (their files are not data: /proc/self/..., /dev/null).
+bool in_system_folder(const std::string& canonical) {
+  for (const std::string folder : {"/proc", "/sys", "/dev"})
+    if (canonical == folder || canonical.rfind(folder + "/", 0) == 0) return true;
+  return false;
+}
+
+// The nearest existing folder at or above `folder` (where missing folders would be created).
+fs::path nearest_existing(fs::path folder) {
+  std::error_code code;
+  while (!folder.empty() && !fs::exists(folder, code) && folder.has_parent_path() && folder.parent_path() != folder)
+    folder = folder.parent_path();
+  return folder.empty() ? fs::path(".") : folder;
+}
+
+// Error unless a file can be created in `folder` (or in the folder that would hold it once created).
+void require_writable_folder(const std::string& option, const std::string& path, const fs::path& folder) {
+  const fs::path existing = nearest_existing(folder);
+  std::error_code code;
+  if (!fs::is_directory(existing, code))
+    throw Error(option + " " + path + ": '" + existing.string() + "' is not a folder, so nothing can be written below it");
+  if (::access(existing.c_str(), W_OK | X_OK) != 0)
+    throw Error(option + " " + path + ": cannot write in '" + existing.string() + "': " + std::strerror(errno));
+}
+
+// Error unless `path` is a regular file or nothing (a symlink counts as what it leads to).
+void require_replaceable(const std::string& option, const std::string& path) {
+  std::error_code code;
+  const fs::file_status link = fs::symlink_status(path, code);
+  if (code || !fs::exists(link)) return;
+  const fs::file_status target = fs::status(path, code);
+  if (fs::is_symlink(link) && (code || !fs::exists(target)))
+    throw Error(option + " " + path + ": a symlink to nothing; refused (it would be replaced by a file)");
+  if (fs::is_directory(target)) throw Error(option + " " + path + ": is a folder, expected a file name");
+  if (!fs::is_regular_file(target))
+    throw Error(option + " " + path + ": is not a regular file (a device, FIFO or socket); refused, it would be replaced");
+}
+
+}  // namespace
+
+void check_outputs(const std::vector<PlannedOutput>& outputs, const std::vector<std::string>& inputs) {
+  std::vector<std::pair<std::string, Identity>> known;  // inputs, then the outputs checked so far
+  for (const std::string& input : inputs)
+    if (!input.empty()) known.emplace_back("input " + input, identity_of(input));
+  std::vector<fs::path> folders;
+  for (const PlannedOutput& output : outputs) {
+    if (output.path.empty()) continue;
+    const Identity identity = identity_of(output.path);
+    if (in_system_folder(identity.canonical))
+      throw Error(output.option + " " + output.path + ": lies in a system folder (/proc, /sys, /dev), not a place for files");
+    require_replaceable(output.option, output.path);
+    const fs::path folder = fs::path(identity.canonical).parent_path();
+    require_writable_folder(output.option, output.path, folder);
+    for (const auto& [what, other] : known)
+      if (identity == other)
+        throw Error(output.option + " " + output.path + ": is the same file as " + what + "; refused (it would be overwritten)");
+    known.emplace_back(output.option + " " + output.path, identity);
+    folders.push_back(folder);
+  }
+  for (const fs::path& folder : folders) {
+    std::error_code code;
+    fs::create_directories(folder, code);
+    if (code) throw Error("cannot create the folder '" + folder.string() + "': " + code.message());
+  }
+}
+
+FolderReplacement::FolderReplacement(std::string option, std::string folder, std::vector<std::string> own_names,
+                                     const std::vector<std::string>& inputs)
+    : option_(std::move(option)), folder_(std::move(folder)), own_names_(std::move(own_names)) {
+  const Identity identity = identity_of(folder_);
+  if (in_system_folder(identity.canonical))
+    throw Error(option_ + " " + folder_ + ": lies in a system folder (/proc, /sys, /dev), not a place for files");
+  std::error_code code;
+  const fs::file_status status = fs::status(folder_, code);
+  if (fs::exists(status)) {
+    if (!fs::is_directory(status)) throw Error(option_ + " " + folder_ + ": exists and is not a folder");
+    for (const fs::directory_entry& entry : fs::directory_iterator(folder_, code)) {
+      const std::string name = entry.path().filename().string();
+      if (std::find(own_names_.begin(), own_names_.end(), name) == own_names_.end())
+        throw Error(option_ + " " + folder_ + ": holds '" + name +
+                    "', which this command does not write; the folder is replaced whole, so give a new or empty "
+                    "folder (or one an earlier run of this command wrote)");
+    }
+    if (code) throw Error(option_ + " " + folder_ + ": cannot list the folder: " + code.message());
+  }
+  for (const std::string& input : inputs) {
+    if (input.empty()) continue;
+    const std::string canonical = identity_of(input).canonical;
+    if (canonical == identity.canonical || canonical.rfind(identity.canonical + "/", 0) == 0)
+      throw Error(option_ + " " + folder_ + ": holds the input " + input + "; refused (the folder is replaced whole)");
+  }
+  const fs::path canonical(identity.canonical);
+  require_writable_folder(option_, folder_, canonical.parent_path());
+  staging_ = (canonical.parent_path() / ("." + canonical.filename().string() + ".staging-" + std::to_string(::getpid())))
+                 .string();
+}
+
+FolderReplacement::~FolderReplacement() {
+  if (committed_ || tracked_.empty()) return;
+  std::error_code code;
+  fs::remove_all(staging_, code);
+}
+
+std::string FolderReplacement::path(const std::string& name) {
+  if (std::find(own_names_.begin(), own_names_.end(), name) == own_names_.end())
+    throw Error("FolderReplacement: '" + name + "' is not one of the folder's own files");
+  if (tracked_.empty()) {
+    std::error_code code;
+    fs::create_directories(fs::path(staging_).parent_path(), code);
+    fs::remove_all(staging_, code);  // a staging folder left by a killed process of the same id
+    if (!fs::create_directory(staging_, code) || code)
+      throw Error(option_ + " " + folder_ + ": cannot create the staging folder '" + staging_ + "': " + code.message());
+    tracked_.push_back(std::make_unique<RemovedOnSignal>(staging_));
+  }
+  const std::string file = (fs::path(staging_) / name).string();
+  tracked_.push_back(std::make_unique<RemovedOnSignal>(file));
+  return file;
+}
+
+void FolderReplacement::commit() {
+  if (tracked_.empty()) return;  // nothing was written
+  // The swap and the removal of the old files are not interrupted halfway by SIGINT or SIGTERM: a
+  // signal arriving meanwhile ends the process right after, with the new folder in place.
+  sigset_t blocked, previous;
+  sigemptyset(&blocked);
+  for (const int signal_number : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&blocked, signal_number);
+  pthread_sigmask(SIG_BLOCK, &blocked, &previous);
+  std::error_code code;
+  int renamed = -1;
+  if (fs::exists(folder_, code)) {
+    renamed = ::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, folder_.c_str(), RENAME_EXCHANGE);
+    if (renamed != 0) {  // a file system without RENAME_EXCHANGE: the old folder aside, then the new one in
+      const std::string aside = staging_ + ".old";
+      if (::rename(folder_.c_str(), aside.c_str()) == 0) {
+        renamed = ::rename(staging_.c_str(), folder_.c_str());
+        if (renamed == 0) fs::remove_all(aside, code);
+        else ::rename(aside.c_str(), folder_.c_str());
+      }
+    }
+  } else {
+    renamed = ::rename(staging_.c_str(), folder_.c_str());
+  }
+  const int error = errno;
+  tracked_.clear();
+  if (renamed == 0) fs::remove_all(staging_, code);  // the old files, swapped out
+  committed_ = renamed == 0;
+  pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+  if (renamed != 0) {
+    fs::remove_all(staging_, code);
+    throw Error(option_ + " " + folder_ + ": cannot put the new files in place: " + std::strerror(error));
+  }
+}
+
+void require_finite_points(const PointCloud& cloud, const std::string& what) {
+  for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i)
+    if (!cloud.positions.col(i).allFinite())
+      throw Error(what + ": point " + std::to_string(i) +
+                  " is no longer finite (a coordinate beyond float range); check the origin or pose given");
+}
+
+}  // namespace quadrix::cli
