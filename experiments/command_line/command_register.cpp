@@ -61,8 +61,11 @@ void run(const RegisterCommandOptions& options) {
     ground_truth = between_sensor_frames(read_pose_matrix(options.ground_truth), source_origin, target_origin);
 
   const Clock::time_point start = Clock::now();
-  const PointCloud source = centred_on_sensor(read_point_cloud(options.source), source_origin);
-  const PointCloud target = centred_on_sensor(read_point_cloud(options.target), target_origin);
+  // Read relative to a local origin (large coordinates stay exact) and centred in double.
+  CloudReadOptions read_options;
+  read_options.local_origin = LocalOrigin::Auto;
+  const PointCloud source = centred_on_sensor(read_point_cloud(options.source, read_options), source_origin);
+  const PointCloud target = centred_on_sensor(read_point_cloud(options.target, read_options), target_origin);
   std::vector<std::uint32_t> source_labels;
   std::vector<std::uint32_t> target_labels;
   if (!options.labels_source.empty()) source_labels = read_semantic_kitti_labels(options.labels_source, source.size());
