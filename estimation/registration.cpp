@@ -71,9 +71,13 @@ const char* registration_status_name(RegistrationStatus status) {
 
 PointCloud centred_on_sensor(PointCloud cloud, const Eigen::Vector3d& sensor_origin) {
   if (!sensor_origin.allFinite()) throw Error("the sensor origin must be finite");
-  if (sensor_origin.isZero(0.0)) return cloud;  // already there
+  // The file-frame point is local_origin + position: the shift is formed in double, so a cloud read
+  // relative to a local origin near the sensor keeps its precision.
+  const Eigen::Vector3d shift = cloud.local_origin - sensor_origin;
+  cloud.local_origin.setZero();
+  if (shift.isZero(0.0)) return cloud;  // already there
   for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i)
-    cloud.positions.col(i) = (cloud.positions.col(i).cast<double>() - sensor_origin).cast<float>();
+    cloud.positions.col(i) = (cloud.positions.col(i).cast<double>() + shift).cast<float>();
   return cloud;
 }
 

@@ -384,7 +384,8 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
 
 /// `cloud` (every field kept) moved by -sensor_origin, so that its sensor stands at the origin: the
 /// frame the pipeline measures ranges, free space and rotations in, for a cloud given in another
-/// frame (a map's) with its sensor at `sensor_origin`. Throws quadrix::Error for a non-finite origin.
+/// frame (a map's) with its sensor at `sensor_origin`. The cloud's local_origin is added first (in
+/// double) and the result has none. Throws quadrix::Error for a non-finite origin.
 PointCloud centred_on_sensor(PointCloud cloud, const Eigen::Vector3d& sensor_origin);
 
 /// A transform between sensor-centred clouds (centred_on_sensor) as one between the clouds' own

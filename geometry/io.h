@@ -20,7 +20,7 @@ namespace quadrix {
 
 /// Point-cloud file formats. `Auto` chooses by extension.
 enum class CloudFormat {
-  Auto,         ///< by extension: .bin, .pcd.bin, .ply, .pcd, .xyz/.txt, .csv, .npy
+  Auto,         ///< by extension: .bin, .pcd.bin, .ply, .pcd, .xyz/.txt, .csv, .npy, .las
   KittiBin,     ///< float32 x, y, z, intensity (16 bytes a point)
   NuScenesBin,  ///< float32 x, y, z, intensity, ring (20 bytes a point)
   Ply,          ///< ascii, binary_little_endian, binary_big_endian
@@ -28,11 +28,12 @@ enum class CloudFormat {
   Xyz,          ///< whitespace-separated x y z [more columns], '#' comments
   Csv,          ///< comma-separated, optional header row naming x,y,z
   Npy,          ///< NumPy N x 3+ float32/float64, C or Fortran order
+  Las,          ///< ASPRS LAS 1.0-1.4, point formats 0-10 (uncompressed; LAZ is refused)
 };
 
 /// Name of a format ("kitti-bin", "ply", ...), as accepted by --format.
 std::string cloud_format_name(CloudFormat format);
-/// Parses --format values (auto, bin, kitti-bin, nuscenes-bin, ply, pcd, xyz, csv, npy); throws Error otherwise.
+/// Parses --format values (auto, bin, kitti-bin, nuscenes-bin, ply, pcd, xyz, csv, npy, las); throws Error otherwise.
 CloudFormat cloud_format_from_name(const std::string& name);
 /// The format `path` would be read or written with under `Auto`; throws Error for unknown extensions.
 CloudFormat cloud_format_from_path(const std::string& path);
@@ -46,9 +47,25 @@ struct CloudReadReport {
   std::vector<std::string> fields;          ///< per-point fields in file order
 };
 
+/// Coordinates beyond which float32 storage loses more than half a millimetre (its spacing is
+/// 0.98 mm from 8192 to 16384): an axis with a coordinate larger than this gets a local origin.
+constexpr double kLocalOriginThreshold = 1e4;
+
+/// A local origin for float storage of points near `reference` (file coordinates): on each axis
+/// whose |reference| exceeds kLocalOriginThreshold, the reference rounded to a whole unit; zero on
+/// the others (sensor-frame clouds keep their frame). Non-finite components give zero.
+Eigen::Vector3d local_origin_near(const Eigen::Vector3d& reference);
+
+/// Whether a reader stores positions relative to a local origin (PointCloud::local_origin).
+enum class LocalOrigin {
+  Zero,  ///< positions as in the file (float32: large coordinates are rounded)
+  Auto,  ///< local_origin_near(the centre of the file's bounding box), subtracted in double before float storage
+};
+
 /// Options of read_point_cloud.
 struct CloudReadOptions {
   CloudFormat format = CloudFormat::Auto;   ///< override the extension
+  LocalOrigin local_origin = LocalOrigin::Zero;  ///< Auto keeps georeferenced coordinates exact (see PointCloud)
   bool keep_extra_fields = true;            ///< keep scalar fields other than x,y,z,intensity,label,rgb
   bool reject_non_finite = false;           ///< throw Error at the first NaN/inf coordinate instead of dropping it
 };
@@ -61,7 +78,9 @@ struct CloudReadOptions {
 /// every other field -> extra_fields (when keep_extra_fields). Files without names (KITTI/nuScenes .bin,
 /// XYZ, headerless CSV, .npy) name their columns: 3 -> x y z; 4 -> x y z intensity; 6 -> x y z red green
 /// blue; any other count -> x y z column_4 column_5 ... (1-based). A point whose x, y or z is NaN/inf
-/// (or overflows float) is dropped and counted in report->non_finite_dropped.
+/// (or overflows float) is dropped and counted in report->non_finite_dropped. LAS: intensity, the
+/// classification as labels, RGB as colours, return_number and number_of_returns as extra fields.
+/// KITTI/nuScenes .bin store float32 and always keep a zero local origin.
 PointCloud read_point_cloud(const std::string& path, const CloudReadOptions& options = {},
                             CloudReadReport* report = nullptr);
 
@@ -72,6 +91,7 @@ struct CloudWriteOptions {
 };
 
 /// Writes positions and every present field (intensity, labels, colours, extra fields) atomically.
+/// A cloud with a non-zero local_origin is written in the file's frame, its positions as doubles.
 void write_point_cloud(const std::string& path, const PointCloud& cloud, const CloudWriteOptions& options = {});
 
 /// Reads a SemanticKITTI .label file (uint32 per point, lower 16 bits = semantic class, upper = instance).

@@ -61,7 +61,7 @@ void decode_typed(const char* source, std::size_t stride, std::size_t count, boo
   }
 }
 
-enum class Role { X, Y, Z, Intensity, Label, Red, Green, Blue, Extra };
+using Role = FieldRole;
 
 Role role_of(const std::string& name) {
   const std::string lower = lowercase(name);
@@ -85,6 +85,39 @@ std::uint8_t to_color_channel(double value, bool scale_unit_range) {
 }
 
 }  // namespace
+
+FieldRole field_role(const std::string& name) { return role_of(name); }
+
+RandomAccessFile::RandomAccessFile(const std::string& path) : path_(path) {
+  descriptor_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (descriptor_ < 0) throw file_error(path, std::string("cannot open: ") + std::strerror(errno));
+  struct stat status {};
+  if (::fstat(descriptor_, &status) != 0 || !S_ISREG(status.st_mode)) {
+    ::close(descriptor_);
+    throw file_error(path, S_ISDIR(status.st_mode) ? "is a directory, expected a file"
+                                                    : "is not a regular file (a FIFO, device or socket cannot be streamed)");
+  }
+  size_ = static_cast<std::size_t>(status.st_size);
+}
+
+RandomAccessFile::~RandomAccessFile() {
+  if (descriptor_ >= 0) ::close(descriptor_);
+}
+
+void RandomAccessFile::read_at(std::size_t offset, std::size_t count, char* destination) const {
+  if (offset > size_ || count > size_ - offset)
+    throw file_error(path_, "truncated: needs bytes " + std::to_string(offset) + ".." + std::to_string(offset + count) +
+                                " but the file has " + std::to_string(size_));
+  std::size_t done = 0;
+  while (done < count) {
+    const ssize_t got = ::pread(descriptor_, destination + done, count - done, static_cast<off_t>(offset + done));
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0)
+      throw file_error(path_, "read failed at byte " + std::to_string(offset + done) + ": " +
+                                  (got < 0 ? std::strerror(errno) : "file shrank while reading"));
+    done += static_cast<std::size_t>(got);
+  }
+}
 
 FileBytes read_file_bytes(const std::string& path) {
   std::error_code code;
@@ -215,19 +248,36 @@ void require_xyz_columns(const std::string& path, const std::vector<FieldColumn>
   }
 }
 
-/// Copies the finite positions (or throws under reject_non_finite); returns the rows kept, which other fields follow.
+/// local_origin_near the centre of the finite points' box (zero when there are none).
+Eigen::Vector3d auto_local_origin(const double* x, const double* y, const double* z, std::size_t rows) {
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (std::size_t i = 0; i < rows; ++i) {
+    const Eigen::Vector3d p(x[i], y[i], z[i]);
+    if (!p.allFinite()) continue;
+    low = low.cwiseMin(p);
+    high = high.cwiseMax(p);
+  }
+  if (!(low.array() <= high.array()).all()) return Eigen::Vector3d::Zero();
+  return local_origin_near(0.5 * (low + high));
+}
+
+/// Copies the finite positions relative to the local origin the options ask for (or throws under
+/// reject_non_finite); returns the rows kept, which other fields follow.
 std::vector<std::size_t> copy_finite_positions(const std::string& path, const ColumnRoles& roles, std::size_t rows,
                                                const CloudReadOptions& options, PointCloud& cloud) {
   const double* x = roles.by_role[0]->values.data();
   const double* y = roles.by_role[1]->values.data();
   const double* z = roles.by_role[2]->values.data();
+  if (options.local_origin == LocalOrigin::Auto) cloud.local_origin = auto_local_origin(x, y, z, rows);
+  const Eigen::Vector3d origin = cloud.local_origin;
   std::vector<std::size_t> kept;
   kept.reserve(rows);
   cloud.positions.resize(3, static_cast<Eigen::Index>(rows));
   float* out = cloud.positions.data();
   std::size_t count = 0;
   for (std::size_t i = 0; i < rows; ++i) {
-    const float px = static_cast<float>(x[i]), py = static_cast<float>(y[i]), pz = static_cast<float>(z[i]);
+    const float px = static_cast<float>(x[i] - origin.x()), py = static_cast<float>(y[i] - origin.y()),
+                pz = static_cast<float>(z[i] - origin.z());
     if (std::isfinite(px) && std::isfinite(py) && std::isfinite(pz)) {
       out[3 * count] = px;
       out[3 * count + 1] = py;
@@ -408,6 +458,14 @@ void check_extra_field_name(const std::string& path, const std::string& name) {
 
 }  // namespace io_internal
 
+Eigen::Vector3d local_origin_near(const Eigen::Vector3d& reference) {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  for (int axis = 0; axis < 3; ++axis)
+    if (std::isfinite(reference[axis]) && std::abs(reference[axis]) > kLocalOriginThreshold)
+      origin[axis] = std::round(reference[axis]);
+  return origin;
+}
+
 std::string cloud_format_name(CloudFormat format) {
   switch (format) {
     case CloudFormat::Auto: return "auto";
@@ -418,6 +476,7 @@ std::string cloud_format_name(CloudFormat format) {
     case CloudFormat::Xyz: return "xyz";
     case CloudFormat::Csv: return "csv";
     case CloudFormat::Npy: return "npy";
+    case CloudFormat::Las: return "las";
   }
   return "unknown";
 }
@@ -432,8 +491,9 @@ CloudFormat cloud_format_from_name(const std::string& name) {
   if (lower == "xyz" || lower == "txt") return CloudFormat::Xyz;
   if (lower == "csv") return CloudFormat::Csv;
   if (lower == "npy") return CloudFormat::Npy;
+  if (lower == "las") return CloudFormat::Las;
   throw Error("unknown point-cloud format '" + name +
-              "' (expected one of: auto, bin, kitti-bin, nuscenes-bin, ply, pcd, xyz, txt, csv, npy)");
+              "' (expected one of: auto, bin, kitti-bin, nuscenes-bin, ply, pcd, xyz, txt, csv, npy, las)");
 }
 
 CloudFormat cloud_format_from_path(const std::string& path) {
@@ -446,9 +506,13 @@ CloudFormat cloud_format_from_path(const std::string& path) {
   if (ends_with(lower, ".xyz") || ends_with(lower, ".txt")) return CloudFormat::Xyz;
   if (ends_with(lower, ".csv")) return CloudFormat::Csv;
   if (ends_with(lower, ".npy")) return CloudFormat::Npy;
+  if (ends_with(lower, ".las")) return CloudFormat::Las;
+  if (ends_with(lower, ".laz"))
+    throw file_error(path, "LAZ (LASzip-compressed LAS) is not read; decompress it to .las first, e.g. "
+                           "`laszip -i in.laz -o out.las` or `pdal translate in.laz out.las`");
   throw file_error(path,
-                   "unknown point-cloud extension (expected .bin, .pcd.bin, .ply, .pcd, .xyz, .txt, .csv or .npy; "
-                   "or choose the format explicitly, e.g. --format ply)");
+                   "unknown point-cloud extension (expected .bin, .pcd.bin, .ply, .pcd, .xyz, .txt, .csv, .npy or "
+                   ".las; or choose the format explicitly, e.g. --format ply)");
 }
 
 PointCloud read_point_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport* report) {
@@ -465,6 +529,7 @@ PointCloud read_point_cloud(const std::string& path, const CloudReadOptions& opt
     case CloudFormat::Xyz: return io_internal::read_xyz_cloud(path, options, out);
     case CloudFormat::Csv: return io_internal::read_csv_cloud(path, options, out);
     case CloudFormat::Npy: return io_internal::read_npy_cloud(path, options, out);
+    case CloudFormat::Las: return io_internal::read_las_cloud(path, options, out);
     case CloudFormat::Auto: break;
   }
   throw file_error(path, "no reader for the requested format");

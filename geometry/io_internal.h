@@ -3,6 +3,9 @@
 
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "geometry/las.h"
+
+#include <array>
 
 #include <cstddef>
 #include <cstdint>
@@ -28,6 +31,27 @@ FileBytes read_file_bytes(const std::string& path);
 /// The size of the regular file `path` in bytes, before any of it is read; Error naming the file
 /// when it does not exist or is not a regular file.
 std::size_t regular_file_size(const std::string& path);
+/// A regular file open for positioned reads (the streaming readers): its size known up front, every
+/// read checked. FIFOs and devices are refused, so nothing blocks or reads without bound.
+class RandomAccessFile {
+ public:
+  /// Opens `path`; Error naming it when it cannot be opened or is not a regular file.
+  explicit RandomAccessFile(const std::string& path);
+  ~RandomAccessFile();
+  RandomAccessFile(const RandomAccessFile&) = delete;
+  RandomAccessFile& operator=(const RandomAccessFile&) = delete;
+  /// Bytes in the file when it was opened.
+  std::size_t size() const { return size_; }
+  /// Reads exactly `count` bytes at `offset` into `destination`; Error naming the file when they are not there.
+  void read_at(std::size_t offset, std::size_t count, char* destination) const;
+  /// The file's path.
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  int descriptor_ = -1;
+  std::size_t size_ = 0;
+};
 
 /// Scalar storage types of binary formats.
 enum class ScalarType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float32, Float64 };
@@ -41,6 +65,11 @@ bool scalar_is_floating(ScalarType type);
 /// `swap_bytes` for data whose byte order differs from the machine's (little endian).
 void decode_strided(const char* source, std::size_t stride, std::size_t count, ScalarType type, bool swap_bytes,
                     double* destination);
+
+/// The role a field plays by its (case-insensitive) name, as read_point_cloud documents.
+enum class FieldRole { X, Y, Z, Intensity, Label, Red, Green, Blue, Extra };
+/// Role of the field called `name`.
+FieldRole field_role(const std::string& name);
 
 /// Most values a point a cloud reader accepts (the sum of a PCD header's COUNTs, the columns of a
 /// .npy array): each becomes a column, and a file of zero points has no data to bound their number.
@@ -111,8 +140,66 @@ PointCloud read_ply_cloud(const std::string& path, const CloudReadOptions& optio
 PointCloud read_pcd_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report);
 PointCloud read_xyz_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report);
 PointCloud read_csv_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report);
+PointCloud read_las_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report);
 void write_ply_cloud(const std::string& path, const PointCloud& cloud, bool binary);
 void write_pcd_cloud(const std::string& path, const PointCloud& cloud, bool binary);
+
+/// One scalar field of a fixed-size binary record.
+struct RecordField {
+  std::string name;                           ///< as in the header
+  ScalarType type = ScalarType::Float32;      ///< storage type
+  std::size_t offset = 0;                     ///< byte offset inside the record
+};
+
+/// Where the fixed-size point records of a binary file are and what they hold (streaming readers).
+struct BinaryRecordLayout {
+  std::string encoding;                       ///< e.g. "binary_little_endian"
+  std::size_t body_offset = 0;                ///< byte of the first record
+  std::size_t record_size = 0;                ///< bytes a record
+  std::size_t records = 0;                    ///< records declared
+  bool swap_bytes = false;                    ///< big-endian data
+  std::vector<RecordField> fields;            ///< scalar fields
+};
+
+/// The vertex records of a binary PLY whose header is in `text` (the start of the file). Error for
+/// ascii, a vertex element with list properties, or an earlier element with lists (records of
+/// variable size cannot be skipped without reading them).
+BinaryRecordLayout ply_record_layout(const std::string& path, std::string_view text);
+/// The point records of a DATA binary PCD whose header is in `text`. Error for ascii and binary_compressed.
+BinaryRecordLayout pcd_record_layout(const std::string& path, std::string_view text);
+
+/// LAS point records decoded into columns (file coordinates in double).
+struct LasRecords {
+  std::size_t count = 0;                                  ///< records decoded
+  std::vector<double> x, y, z;                            ///< X * scale + offset
+  std::vector<std::uint16_t> intensity;                   ///< as stored
+  std::vector<std::uint8_t> classification;               ///< class (formats 0-5: low 5 bits)
+  std::vector<std::uint8_t> return_number;                ///< 1-based return of the pulse
+  std::vector<std::uint8_t> number_of_returns;            ///< returns of the pulse
+  std::vector<std::array<std::uint16_t, 3>> rgb;          ///< formats 2, 3, 5, 7, 8, 10 only
+};
+
+/// Reads the point records of a LAS file in order, block by block, with the header checked first.
+/// Every decoded point is checked against the header's bounding box (Error naming the field).
+class LasRecordReader {
+ public:
+  /// Opens `path` and reads its header (read_las_header).
+  explicit LasRecordReader(const std::string& path);
+  /// The checked header.
+  const LasHeader& header() const { return header_; }
+  /// True when the format carries RGB.
+  bool has_rgb() const;
+  /// Decodes the next at most `max_records` records into `records`; false when none remain.
+  bool read(std::size_t max_records, LasRecords& records);
+  /// Records decoded so far.
+  std::size_t records_read() const { return next_record_; }
+
+ private:
+  RandomAccessFile file_;
+  LasHeader header_;
+  std::size_t next_record_ = 0;
+  std::vector<char> buffer_;
+};
 
 /// A NumPy array of floating-point numbers, rows x columns, converted to double (row-major).
 struct NumpyMatrix {

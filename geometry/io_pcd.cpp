@@ -367,6 +367,25 @@ void read_pcd_binary(const std::string& path, const FileBytes& bytes, const PcdH
 
 }  // namespace
 
+BinaryRecordLayout pcd_record_layout(const std::string& path, std::string_view text) {
+  const PcdHeader header = parse_pcd_header(path, text);
+  if (header.data != "binary")
+    throw file_error(path, "is DATA " + header.data +
+                               " PCD, which is not streamed (DATA binary is); read it whole or convert it to binary");
+  BinaryRecordLayout layout;
+  layout.encoding = header.data;
+  layout.body_offset = header.body_offset;
+  layout.record_size = header.point_stride;
+  layout.records = header.points;
+  for (const PcdField& field : header.fields) {
+    if (field.name == "_" || is_packed_color(field)) continue;
+    for (std::size_t c = 0; c < field.count; ++c)
+      layout.fields.push_back({field.count == 1 ? field.name : field.name + "_" + std::to_string(c), field.scalar,
+                               field.offset + c * field.size});
+  }
+  return layout;
+}
+
 PointCloud read_pcd_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report) {
   const FileBytes bytes = read_file_bytes(path);
   const PcdHeader header = parse_pcd_header(path, bytes.view());
@@ -383,7 +402,11 @@ void write_pcd_cloud(const std::string& path, const PointCloud& cloud, bool bina
   const std::size_t n = cloud.size();
   const bool has_intensity = !cloud.intensity.empty(), has_labels = !cloud.labels.empty();
   const bool has_colors = !cloud.colors.empty();
-  std::string fields = "FIELDS x y z", sizes = "SIZE 4 4 4", types = "TYPE F F F", counts = "COUNT 1 1 1";
+  // A cloud kept relative to a local origin is written back in the file's frame, in double.
+  const bool in_double = !cloud.local_origin.isZero(0.0);
+  const std::size_t position_bytes = in_double ? 24 : 12;
+  std::string fields = "FIELDS x y z", sizes = in_double ? "SIZE 8 8 8" : "SIZE 4 4 4", types = "TYPE F F F",
+              counts = "COUNT 1 1 1";
   auto add = [&](const std::string& name, char type) {
     fields += " " + name;
     sizes += " 4";
@@ -410,12 +433,18 @@ void write_pcd_cloud(const std::string& path, const PointCloud& cloud, bool bina
     stream.write(header.data(), static_cast<std::streamsize>(header.size()));
     const float* positions = cloud.positions.data();
     if (binary) {
-      const std::size_t stride = 12 + 4 * ((has_intensity ? 1 : 0) + (has_labels ? 1 : 0) + (has_colors ? 1 : 0) + extras.size());
+      const std::size_t stride =
+          position_bytes + 4 * ((has_intensity ? 1 : 0) + (has_labels ? 1 : 0) + (has_colors ? 1 : 0) + extras.size());
       std::string body(n * stride, '\0');
       char* cursor = body.data();
       for (std::size_t i = 0; i < n; ++i) {
-        std::memcpy(cursor, positions + 3 * i, 12);
-        cursor += 12;
+        if (in_double) {
+          const Eigen::Vector3d point = cloud.point_in_file_frame(i);
+          std::memcpy(cursor, point.data(), 24);
+        } else {
+          std::memcpy(cursor, positions + 3 * i, 12);
+        }
+        cursor += position_bytes;
         if (has_intensity) (std::memcpy(cursor, &cloud.intensity[i], 4), cursor += 4);
         if (has_labels) (std::memcpy(cursor, &cloud.labels[i], 4), cursor += 4);
         if (has_colors) {
@@ -431,9 +460,11 @@ void write_pcd_cloud(const std::string& path, const PointCloud& cloud, bool bina
     std::string text;
     text.reserve(64 * 1024);
     for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d point = cloud.point_in_file_frame(i);
       for (int axis = 0; axis < 3; ++axis) {
         if (axis) text += ' ';
-        append_number(text, positions[3 * i + axis]);
+        if (in_double) append_number(text, point[axis]);
+        else append_number(text, positions[3 * i + axis]);
       }
       if (has_intensity) (text += ' ', append_number(text, cloud.intensity[i]));
       if (has_labels) (text += ' ', append_number(text, static_cast<std::uint64_t>(cloud.labels[i])));

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <ostream>
 
 namespace quadrix {
@@ -304,6 +305,39 @@ void put(char*& cursor, T value) {
 
 }  // namespace
 
+BinaryRecordLayout ply_record_layout(const std::string& path, std::string_view text) {
+  const PlyHeader header = parse_ply_header(path, text);
+  if (header.encoding == PlyEncoding::Ascii)
+    throw file_error(path, "is ascii PLY, which is not streamed (binary PLY is); read it whole or convert it to binary");
+  std::size_t vertex_index = 0;
+  const PlyElement& vertex = find_vertex_element(path, header, vertex_index);
+  BinaryRecordLayout layout;
+  layout.encoding = header.encoding_name;
+  layout.swap_bytes = header.encoding == PlyEncoding::BinaryBigEndian;
+  layout.body_offset = header.body_offset;
+  for (std::size_t e = 0; e <= vertex_index; ++e) {
+    const PlyElement& element = header.elements[e];
+    if (element.has_list())
+      throw file_error(path, "element '" + element.name + "' has list properties" +
+                                 (e < vertex_index ? " and comes before 'vertex'" : "") +
+                                 ": its records vary in size, so the vertices cannot be streamed; read the file whole");
+    if (e == vertex_index) break;
+    const std::size_t stride = element.scalar_stride();
+    if (stride != 0 && element.count > (std::numeric_limits<std::size_t>::max() - layout.body_offset) / stride)
+      throw file_error(path, "element '" + element.name + "' declares " + std::to_string(element.count) +
+                                 " records, more than any file holds");
+    layout.body_offset += element.count * stride;
+  }
+  layout.records = vertex.count;
+  layout.record_size = vertex.scalar_stride();
+  std::size_t offset = 0;
+  for (const PlyProperty& property : vertex.properties) {
+    layout.fields.push_back({property.name, property.type, offset});
+    offset += scalar_size(property.type);
+  }
+  return layout;
+}
+
 PointCloud read_ply_cloud(const std::string& path, const CloudReadOptions& options, CloudReadReport& report) {
   const FileBytes bytes = read_file_bytes(path);
   const PlyHeader header = parse_ply_header(path, bytes.view());
@@ -338,7 +372,11 @@ void write_ply_cloud(const std::string& path, const PointCloud& cloud, bool bina
   std::vector<const std::vector<float>*> extras;
   std::string header;
   write_text_header(header, binary ? "binary_little_endian" : "ascii", n);
-  header += "property float x\nproperty float y\nproperty float z\n";
+  // A cloud kept relative to a local origin is written back in the file's frame, in double.
+  const bool in_double = !cloud.local_origin.isZero(0.0);
+  const std::size_t position_bytes = in_double ? 24 : 12;
+  header += in_double ? "property double x\nproperty double y\nproperty double z\n"
+                      : "property float x\nproperty float y\nproperty float z\n";
   if (has_intensity) header += "property float intensity\n";
   if (has_labels) header += "property uint label\n";
   if (has_colors) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
@@ -351,13 +389,18 @@ void write_ply_cloud(const std::string& path, const PointCloud& cloud, bool bina
     stream.write(header.data(), static_cast<std::streamsize>(header.size()));
     const float* positions = cloud.positions.data();
     if (binary) {
-      const std::size_t stride = 12 + (has_intensity ? 4 : 0) + (has_labels ? 4 : 0) + (has_colors ? 3 : 0) +
-                                 4 * extras.size();
+      const std::size_t stride = position_bytes + (has_intensity ? 4 : 0) + (has_labels ? 4 : 0) +
+                                 (has_colors ? 3 : 0) + 4 * extras.size();
       std::string body(n * stride, '\0');
       char* cursor = body.data();
       for (std::size_t i = 0; i < n; ++i) {
-        std::memcpy(cursor, positions + 3 * i, 12);
-        cursor += 12;
+        if (in_double) {
+          const Eigen::Vector3d point = cloud.point_in_file_frame(i);
+          std::memcpy(cursor, point.data(), 24);
+        } else {
+          std::memcpy(cursor, positions + 3 * i, 12);
+        }
+        cursor += position_bytes;
         if (has_intensity) put(cursor, cloud.intensity[i]);
         if (has_labels) put(cursor, cloud.labels[i]);
         if (has_colors) {
@@ -372,9 +415,11 @@ void write_ply_cloud(const std::string& path, const PointCloud& cloud, bool bina
     std::string text;
     text.reserve(64 * 1024);
     for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d point = cloud.point_in_file_frame(i);
       for (int axis = 0; axis < 3; ++axis) {
         if (axis) text += ' ';
-        append_number(text, positions[3 * i + axis]);
+        if (in_double) append_number(text, point[axis]);
+        else append_number(text, positions[3 * i + axis]);
       }
       if (has_intensity) (text += ' ', append_number(text, cloud.intensity[i]));
       if (has_labels) (text += ' ', append_number(text, static_cast<std::uint64_t>(cloud.labels[i])));

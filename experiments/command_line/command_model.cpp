@@ -350,6 +350,9 @@ void run(const ModelCommandOptions& options) {
   const Eigen::Vector3d sensor_origin(options.sensor_origin.data());
   if (!sensor_origin.allFinite()) throw Error("--sensor-origin: expected three finite numbers X,Y,Z in metres");
   const bool centred = !sensor_origin.isZero(0.0);
+  // One scan is read relative to a local origin when its coordinates are large (a survey's or a map's
+  // frame), so float32 storage keeps them exact; every output is written back in the file's frame.
+  if (options.inputs.size() == 1 && options.poses.empty()) read_options.local_origin = LocalOrigin::Auto;
   if (centred && (options.inputs.size() != 1 || !options.poses.empty()))
     throw Error("--sensor-origin: takes one input without --poses (stations merged by pose are modelled in the world frame)");
   const PointCloud cloud = read_merged_clouds(options, read_options);
@@ -368,6 +371,7 @@ void run(const ModelCommandOptions& options) {
   if (!options.score_labels.empty()) score_labels = read_semantic_kitti_labels(options.score_labels, cloud.size());
   ModellingResult result = model_scene(modelled, extraction, modelling, labels);
   if (centred) result.model = translated(std::move(result.model), sensor_origin);
+  else if (!cloud.local_origin.isZero(0.0)) result.model = translated(std::move(result.model), cloud.local_origin);
   const SceneModel& model = result.model;
   std::optional<ClassScores> scores;
   if (!options.score_labels.empty()) scores = score_element_classes(modelled, result.extraction, score_labels, extraction);
@@ -385,10 +389,16 @@ void run(const ModelCommandOptions& options) {
 
   write_scene_model_json(options.out, model, model_json_extra(options, modelling, result, raw_bytes, element_counts, scores));
   if (!options.binary.empty()) write_scene_model_binary(options.binary, model);
-  const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
+  const Eigen::Matrix3Xd points = cloud.positions.cast<double>().colwise() + cloud.local_origin;  // the file's frame
   write_mesh_outputs(options, result, points);
-  if (!options.elements.empty()) write_point_cloud(options.elements, element_cloud(result, cloud));
-  const std::string page_path = write_model_page(options, modelling, result, cloud, points);
+  if (!options.elements.empty()) {
+    PointCloud elements = element_cloud(result, cloud);
+    elements.local_origin = cloud.local_origin;  // written in the file's frame
+    write_point_cloud(options.elements, elements);
+  }
+  const PointCloud page_cloud = cloud.local_origin.isZero(0.0) ? PointCloud() : centred_on_sensor(cloud, Eigen::Vector3d::Zero());
+  const std::string page_path =
+      write_model_page(options, modelling, result, cloud.local_origin.isZero(0.0) ? cloud : page_cloud, points);
   print_model_summary(options, modelling, result, cloud, quadric_counts, element_counts, binary_bytes.size(), raw_bytes,
                       page_path);
   if (scores) print_class_scores(*scores);

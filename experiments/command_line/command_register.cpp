@@ -80,8 +80,11 @@ void run(const RegisterCommandOptions& options) {
     initial_guess = between_sensor_frames(read_pose_matrix(options.initial_guess), source_origin, target_origin);
 
   const Clock::time_point start = Clock::now();
-  const PointCloud source = centred_on_sensor(read_point_cloud(options.source), source_origin);
-  const PointCloud target = centred_on_sensor(read_point_cloud(options.target), target_origin);
+  // Read relative to a local origin (large coordinates stay exact) and centred in double.
+  CloudReadOptions read_options;
+  read_options.local_origin = LocalOrigin::Auto;
+  const PointCloud source = centred_on_sensor(read_point_cloud(options.source, read_options), source_origin);
+  const PointCloud target = centred_on_sensor(read_point_cloud(options.target, read_options), target_origin);
   require_finite_points(source, "--source-origin moved " + options.source);
   require_finite_points(target, "--target-origin moved " + options.target);
   std::vector<std::uint32_t> source_labels;

@@ -393,6 +393,74 @@ def scene_model_binaries():
     }
 
 
+# ----------------------------------------------------------------------------------------------
+# LAS 1.0-1.4: public header, variable-length records, point records of formats 0-10.
+
+LAS_BASE_SIZES = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67]
+LAS_RGB_OFFSETS = [0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30]
+
+
+def las_file(minor, point_format, points, extra_bytes=0, vlr=b"", scale=(0.01, 0.01, 0.01), offset=(0.0, 0.0, 0.0)):
+    """A LAS file of integer points [(X, Y, Z, intensity, class)] with a correct header."""
+    header_size = 227 if minor <= 2 else 235 if minor == 3 else 375
+    record = LAS_BASE_SIZES[point_format] + extra_bytes
+    vlrs = b""
+    if vlr:
+        vlrs = struct.pack("<H16sHH32s", 0, b"LASF_Projection", 2112, len(vlr), b"fuzz seed") + vlr
+    offset_to_points = header_size + len(vlrs)
+    coordinates = [[p[axis] * scale[axis] + offset[axis] for p in points] for axis in range(3)]
+    low = [min(c) if c else 0.0 for c in coordinates]
+    high = [max(c) if c else 0.0 for c in coordinates]
+    legacy = len(points) if point_format < 6 or minor < 4 else 0
+    header = bytearray(header_size)
+    header[0:4] = b"LASF"
+    header[24] = 1
+    header[25] = minor
+    header[26:38] = b"quadrix fuzz"
+    struct.pack_into("<HIIBHI", header, 94, header_size, offset_to_points, 1 if vlr else 0, point_format, record, legacy)
+    struct.pack_into("<3d", header, 131, *scale)
+    struct.pack_into("<3d", header, 155, *offset)
+    struct.pack_into("<6d", header, 179, high[0], low[0], high[1], low[1], high[2], low[2])
+    if minor >= 4:
+        struct.pack_into("<Q", header, 247, len(points))
+    body = bytearray()
+    for X, Y, Z, intensity, cls in points:
+        data = bytearray(record)
+        struct.pack_into("<iiiH", data, 0, X, Y, Z, intensity)
+        if point_format < 6:
+            data[14] = 0x09  # return 1 of 1
+            data[15] = cls & 31
+        else:
+            data[14] = 0x11
+            data[16] = cls
+        if LAS_RGB_OFFSETS[point_format]:
+            struct.pack_into("<3H", data, LAS_RGB_OFFSETS[point_format], 65535, 32768, 256)
+        body += data
+    return bytes(header) + vlrs + bytes(body)
+
+
+def las_files():
+    """Every point format, versions 1.2-1.4, extra bytes, a VLR, and damaged headers."""
+    points = [(100, -200, 300, 7, 2), (-5000, 12000, 0, 65535, 1), (0, 0, -70, 0, 6)]
+    seeds = {}
+    for point_format in range(11):
+        minor = 4 if point_format >= 6 else 2 + point_format % 2
+        seeds[f"format_{point_format}_1_{minor}.las"] = las_file(minor, point_format, points,
+                                                                  extra_bytes=point_format % 3,
+                                                                  vlr=b"\x01\x02" if point_format % 2 else b"")
+    utm = las_file(4, 6, points, scale=(0.001, 0.001, 0.001), offset=(500000.0, 5400000.0, 100.0))
+    seeds["utm_1_4.las"] = utm
+    seeds["empty_1_3.las"] = las_file(3, 1, [])
+    seeds["truncated_points.las"] = las_file(2, 1, points)[:-9]
+    lying = bytearray(las_file(4, 7, points))
+    struct.pack_into("<Q", lying, 247, 4)
+    seeds["count_lies.las"] = bytes(lying)
+    laz = bytearray(las_file(2, 3, points))
+    laz[104] = 0x83
+    seeds["laz_bits.las"] = bytes(laz)
+    return seeds
+
+
 HARNESSES = {
     "binary_records": binary_records,
     "ply_cloud": ply_clouds,
@@ -400,6 +468,7 @@ HARNESSES = {
     "pcd": pcds,
     "text_cloud": text_clouds,
     "npy": npys,
+    "las": las_files,
     "pose_matrix": pose_matrices,
     "kitti_poses": kitti_poses,
     "kitti_calibration": kitti_calibrations,

@@ -167,7 +167,7 @@ TEST(IoErrors, TextProblems) {
 
 TEST(IoErrors, UnknownExtensionNamesFile) {
   ScratchDirectory scratch;
-  expect_read_error(scratch.file("cloud.las"), "LASF", "unknown point-cloud extension");
+  expect_read_error(scratch.file("cloud.e57"), "ASTM-E57", "unknown point-cloud extension");
 }
 
 // NaN coordinates in an otherwise good file: dropped and counted by default, an Error on request.

@@ -359,13 +359,16 @@ TEST(IoRoundTrip, FormatNamesAndExtensions) {
   EXPECT_EQ(cloud_format_from_path("x.txt"), CloudFormat::Xyz);
   EXPECT_EQ(cloud_format_from_path("x.csv"), CloudFormat::Csv);
   EXPECT_EQ(cloud_format_from_path("x.npy"), CloudFormat::Npy);
+  EXPECT_EQ(cloud_format_from_path("x.LAS"), CloudFormat::Las);
   for (CloudFormat format : {CloudFormat::Auto, CloudFormat::KittiBin, CloudFormat::NuScenesBin, CloudFormat::Ply,
-                             CloudFormat::Pcd, CloudFormat::Xyz, CloudFormat::Csv, CloudFormat::Npy})
+                             CloudFormat::Pcd, CloudFormat::Xyz, CloudFormat::Csv, CloudFormat::Npy, CloudFormat::Las})
     EXPECT_EQ(cloud_format_from_name(cloud_format_name(format)), format);
   EXPECT_EQ(cloud_format_from_name("bin"), CloudFormat::KittiBin);
-  EXPECT_THAT([] { cloud_format_from_name("las"); }, ::testing::ThrowsMessage<Error>(::testing::HasSubstr("'las'")));
-  EXPECT_THAT([] { cloud_format_from_path("/tmp/cloud.las"); },
-              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("/tmp/cloud.las")));
+  EXPECT_THAT([] { cloud_format_from_name("e57"); }, ::testing::ThrowsMessage<Error>(::testing::HasSubstr("'e57'")));
+  EXPECT_THAT([] { cloud_format_from_path("/tmp/cloud.e57"); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("/tmp/cloud.e57")));
+  EXPECT_THAT([] { cloud_format_from_path("/tmp/cloud.laz"); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("pdal translate")));
 }
 
 TEST(IoRoundTrip, FormatOverrideReadsOddExtension) {

@@ -1,0 +1,44 @@
+// The public header block of an ASPRS LAS 1.0-1.4 file, for `quadrix info` and streaming readers.
+// Point data is read with read_point_cloud (geometry/io.h) or open_point_stream (geometry/point_stream.h).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace quadrix {
+
+/// What a LAS public header declares, checked against the file (see read_las_header).
+struct LasHeader {
+  int version_major = 1;                 ///< 1
+  int version_minor = 2;                 ///< 0..4
+  int point_format = 0;                  ///< point data record format 0..10
+  std::size_t header_size = 0;           ///< bytes of the public header block
+  std::size_t point_data_offset = 0;     ///< byte where the point records start
+  std::size_t record_length = 0;         ///< bytes a point record (base size of the format + extra bytes)
+  std::size_t extra_bytes = 0;           ///< record_length minus the format's base size
+  std::uint64_t point_count = 0;         ///< records (LAS 1.4: the 64-bit count when set)
+  std::size_t vlr_count = 0;             ///< variable-length records before the points
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones();   ///< x = X * scale + offset (double)
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< see scale
+  Eigen::Vector3d min = Eigen::Vector3d::Zero();     ///< header bounding box, file coordinates
+  Eigen::Vector3d max = Eigen::Vector3d::Zero();     ///< header bounding box, file coordinates
+  std::string system_identifier;         ///< as written (trailing NULs removed)
+  std::string generating_software;       ///< as written (trailing NULs removed)
+  std::size_t file_size = 0;             ///< bytes of the whole file
+};
+
+/// Base record size of each LAS point data record format 0..10 (LAS 1.4 R15, section 2.6).
+inline constexpr std::array<std::size_t, 11> kLasBaseRecordSize = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
+
+/// Reads and checks a LAS public header: signature, version, header size, point format and record
+/// length, point count (legacy and 64-bit) and offset against the file size, variable-length
+/// records inside the header area, finite non-zero scales and finite offsets and bounds. Throws
+/// quadrix::Error naming the file and the field; a LAZ file (compressed point format or LASzip
+/// record) gets an error naming laszip and pdal translate, which decompress it.
+LasHeader read_las_header(const std::string& path);
+
+}  // namespace quadrix

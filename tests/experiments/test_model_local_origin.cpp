@@ -1,0 +1,139 @@
+// Georeferenced clouds through `quadrix model`: a scan moved to UTM-sized coordinates and modelled
+// with --sensor-origin gives the model of the unmoved scan (float32 before centring used to cost
+// 0.25-0.5 m there), and the real LAS tile is modelled in the file's own coordinates.
+#include "estimation/registration.h"
+#include "geometry/io.h"
+#include "geometry/las.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+
+namespace quadrix {
+namespace {
+
+/// A fresh folder for one test, removed at destruction.
+struct Folder {
+  std::filesystem::path path;
+  explicit Folder(const std::string& name)
+      : path(std::filesystem::temp_directory_path() / (name + "_" + std::to_string(std::random_device{}()))) {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~Folder() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path, ignored);
+  }
+  std::string file(const std::string& name) const { return (path / name).string(); }
+};
+
+/// Runs `quadrix model INPUT ARGUMENTS --out NAME.json`; returns the JSON (the log on failure).
+nlohmann::json run_model(const Folder& folder, const std::string& input, const std::string& arguments,
+                         const std::string& name) {
+  const std::string log = folder.file(name + ".txt");
+  const std::string command = std::string(QUADRIX_EXECUTABLE) + " model '" + input + "' --no-page " + arguments +
+                              " --out '" + folder.file(name + ".json") + "' > '" + log + "' 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream log_file(log);
+  const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(status, 0) << command << "\n" << text;
+  std::ifstream json_file(folder.file(name + ".json"));
+  if (!json_file) return nlohmann::json::object();
+  return nlohmann::json::parse(json_file);
+}
+
+/// Quadrics per "class/type".
+std::map<std::string, int> counts(const nlohmann::json& model) {
+  std::map<std::string, int> result;
+  for (const auto& quadric : model["quadrics"])
+    ++result[quadric["class"].get<std::string>() + "/" + quadric["type"].get<std::string>()];
+  return result;
+}
+
+Eigen::Vector3d centre(const nlohmann::json& quadric) {
+  return Eigen::Vector3d(quadric["center"][0].get<double>(), quadric["center"][1].get<double>(),
+                         quadric["center"][2].get<double>());
+}
+
+const Eigen::Vector3d kUtmOffset(5.4e6, 4e5, 100.0);
+
+// KITTI frame 0 written in double at a UTM-sized position: read with a local origin and centred on
+// its sensor in double, it is the scan itself to float32's resolution near the sensor; read in float32
+// first (the old path), it is off by decimetres.
+TEST(LocalOriginCentring, GeoreferencedScanCentredOnItsSensorIsTheScan) {
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/000000.bin");
+  const Folder folder("quadrix_local_origin_centring");
+  const PointCloud scan = read_point_cloud(testing::shared_data_path("kitti00/velodyne/000000.bin"));
+  PointCloud moved = scan;
+  moved.local_origin = kUtmOffset;  // written in the file's frame, as doubles
+  write_point_cloud(folder.file("moved.ply"), moved);
+  CloudReadOptions options;
+  options.local_origin = LocalOrigin::Auto;
+  const PointCloud exact = centred_on_sensor(read_point_cloud(folder.file("moved.ply"), options), kUtmOffset);
+  const PointCloud rounded = centred_on_sensor(read_point_cloud(folder.file("moved.ply")), kUtmOffset);
+  ASSERT_EQ(exact.size(), scan.size());
+  EXPECT_TRUE(exact.local_origin.isZero(0.0));
+  // KITTI points lie within 128 m of the sensor: float32 spacing there is 7.6 um, two roundings.
+  EXPECT_LT((exact.positions - scan.positions).cwiseAbs().maxCoeff(), 2e-5f);
+  EXPECT_GT((rounded.positions - scan.positions).cwiseAbs().maxCoeff(), 0.1f);
+}
+
+// The same scan through the command: the model of the moved file with --sensor-origin has the
+// unmoved scan's quadrics, each moved by the offset.
+TEST(ModelCommand, GeoreferencedScanWithSensorOriginModelsAsTheUnmovedScan) {
+  QUADRIX_REQUIRE_SHARED_DATA("kitti00/velodyne/000000.bin");
+  const Folder folder("quadrix_local_origin_model");
+  const std::string original = testing::shared_data_path("kitti00/velodyne/000000.bin");
+  PointCloud moved = read_point_cloud(original);
+  moved.local_origin = kUtmOffset;
+  write_point_cloud(folder.file("moved.ply"), moved);
+  const nlohmann::json unmoved_model = run_model(folder, original, "", "unmoved");
+  const nlohmann::json moved_model =
+      run_model(folder, folder.file("moved.ply"), "--sensor-origin 5400000,400000,100", "moved");
+  ASSERT_GE(unmoved_model["quadrics"].size(), 20u);
+  EXPECT_EQ(counts(moved_model), counts(unmoved_model));
+  ASSERT_EQ(moved_model["quadrics"].size(), unmoved_model["quadrics"].size());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < unmoved_model["quadrics"].size(); ++i)
+    worst = std::max(worst, (centre(moved_model["quadrics"][i]) - kUtmOffset - centre(unmoved_model["quadrics"][i])).norm());
+  EXPECT_LT(worst, 1e-3) << "largest centre difference, metres";
+}
+
+// The real airborne LAS tile (state-plane feet, ~6e5 and ~8e5): modelled relative to a local origin
+// and written in the file's coordinates. The same points given near the origin (the floats the
+// reader stored) give the same quadrics, moved by that origin.
+TEST(ModelCommand, LasTileIsModelledInTheFilesOwnCoordinates) {
+  QUADRIX_REQUIRE_SHARED_DATA("als_autzen/autzen_trim.las");
+  const Folder folder("quadrix_local_origin_las");
+  const std::string las = testing::shared_data_path("als_autzen/autzen_trim.las");
+  CloudReadOptions options;
+  options.local_origin = LocalOrigin::Auto;
+  PointCloud local = read_point_cloud(las, options);
+  const Eigen::Vector3d origin = local.local_origin;
+  ASSERT_GT(origin.head<2>().cwiseAbs().minCoeff(), 1e5);
+  local.local_origin.setZero();
+  local.extra_fields.clear();
+  write_point_cloud(folder.file("local.ply"), local);
+  const nlohmann::json file_frame = run_model(folder, las, "--preset monument", "las");
+  const nlohmann::json near_origin = run_model(folder, folder.file("local.ply"), "--preset monument", "local");
+  ASSERT_GE(file_frame["quadrics"].size(), 1u);
+  EXPECT_EQ(counts(file_frame), counts(near_origin));
+  ASSERT_EQ(file_frame["quadrics"].size(), near_origin["quadrics"].size());
+  const LasHeader header = read_las_header(las);
+  EXPECT_TRUE((origin.head<2>().array() >= header.min.head<2>().array()).all() &&
+              (origin.head<2>().array() <= header.max.head<2>().array()).all())
+      << "local origin " << origin.transpose() << " outside the tile";
+  for (std::size_t i = 0; i < file_frame["quadrics"].size(); ++i)
+    EXPECT_LT((centre(file_frame["quadrics"][i]) - origin - centre(near_origin["quadrics"][i])).norm(), 1e-6)
+        << "quadric " << i;
+}
+
+}  // namespace
+}  // namespace quadrix
