@@ -22,6 +22,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <thread>
 #include <unordered_map>
 
@@ -634,8 +635,10 @@ class PartialReader {
 
 }  // namespace
 
-void write_partial_model(const std::string& path, const PartialModel& part) {
-  write_file_atomically(path, [&](std::ostream& out) {
+namespace {
+
+void write_partial_stream(std::ostream& out, const PartialModel& part) {
+  {
     out.write(kPartialMagic, sizeof kPartialMagic);
     put(out, kPartialVersion);
     put(out, static_cast<std::int32_t>(part.group));
@@ -658,12 +661,10 @@ void write_partial_model(const std::string& path, const PartialModel& part) {
       put(out, static_cast<std::uint64_t>(piece.sample.cols()));
       for (Eigen::Index k = 0; k < piece.sample.size(); ++k) put(out, piece.sample.data()[k]);
     }
-  });
+  }
 }
 
-PartialModel read_partial_model(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("partial model " + path + ": cannot open");
+PartialModel read_partial_stream(std::istream& in, const std::string& path) {
   PartialReader reader(in, path);
   char magic[8];
   in.read(magic, sizeof magic);
@@ -713,6 +714,29 @@ PartialModel read_partial_model(const std::string& path) {
   if (in.peek() != std::char_traits<char>::eof())
     throw Error("partial model " + path + ": bytes after the last of its " + std::to_string(count) + " pieces");
   return part;
+}
+
+}  // namespace
+
+void write_partial_model(const std::string& path, const PartialModel& part) {
+  write_file_atomically(path, [&](std::ostream& out) { write_partial_stream(out, part); });
+}
+
+PartialModel read_partial_model(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("partial model " + path + ": cannot open");
+  return read_partial_stream(in, path);
+}
+
+std::string partial_model_to_bytes(const PartialModel& part) {
+  std::ostringstream out(std::ios::binary);
+  write_partial_stream(out, part);
+  return out.str();
+}
+
+PartialModel partial_model_from_bytes(const std::string& bytes, const std::string& name) {
+  std::istringstream in(bytes, std::ios::binary);
+  return read_partial_stream(in, name);
 }
 
 }  // namespace quadrix

@@ -131,6 +131,11 @@ void write_partial_model(const std::string& path, const PartialModel& part);
 /// Reads a partial model; throws quadrix::Error naming the file and what is wrong.
 PartialModel read_partial_model(const std::string& path);
 
+/// A partial model as the bytes write_partial_model writes (to hand between processes).
+std::string partial_model_to_bytes(const PartialModel& part);
+/// Parses partial_model_to_bytes's output; throws quadrix::Error naming `name` and what is wrong.
+PartialModel partial_model_from_bytes(const std::string& bytes, const std::string& name);
+
 /// Parses "i/n" (1 <= i <= n) of `--tile` into a 0-based group and the group count; throws
 /// quadrix::Error otherwise.
 void parse_tile_group(const std::string& text, int& group, int& groups);
