@@ -493,6 +493,15 @@ ModellingResult merge_partial_models(const std::vector<PartialModel>& parts, con
     for (Eigen::Index k = 0; k < shape_pieces[i].points.cols(); ++k) primitive.sample.push_back(shape_pieces[i].points.col(k));
   }
 
+  // A piece a tile found mostly in its margin that joined no neighbour's piece can be left with
+  // fewer points than the smallest shape Efficient RANSAC reports (min_points, counted on the
+  // simplified cloud, so never more than the points): it is not a primitive of the survey.
+  primitives.erase(std::remove_if(primitives.begin(), primitives.end(),
+                                  [&](const MergedPrimitive& primitive) {
+                                    return primitive.count < static_cast<double>(extraction.shapes.minimum_points);
+                                  }),
+                   primitives.end());
+
   // The ground: the lowest of the large near-horizontal planes, as detect_shapes marks it.
   const Eigen::Vector3d up = extraction.up.normalized();
   const double cos_ten_degrees = std::cos(10.0 * kPi / 180.0);
