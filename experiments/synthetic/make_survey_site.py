@@ -10,7 +10,7 @@ ground plane. Each copy is scanned from its own stations only (a neighbour's sta
 too on a real site: the point count grows with the copies and the shadows stay the monument's).
 
     quadrix synth monument --sensor tls --out /tmp/monument
-    PYTHONPATH=build/python python3 experiments/synthetic/make_survey_site.py /tmp/monument \\
+    /usr/bin/python3 experiments/synthetic/make_survey_site.py /tmp/monument \\
         --copies 4x2 --out /tmp/site_8.ply
 
 Writes the PLY (float32 x, y, z, in the site's frame) and SITE.truth.json beside it.
@@ -22,10 +22,36 @@ import sys
 
 import numpy as np
 
-import quadrix
-
 PLAZA_X, PLAZA_Y = 160.0, 140.0
 PER_COPY = {"circular_cylinder": 33, "plane": 24, "sphere": 3, "circular_cone": 1}
+
+
+PLY_TYPES = {"float": "<f4", "double": "<f8", "uint": "<u4", "int": "<i4", "uchar": "u1", "ushort": "<u2", "short": "<i2"}
+
+
+def read_ply_positions(path):
+    """x, y, z of a binary little-endian PLY whose vertex element holds scalar properties only (as
+    `quadrix synth` writes them)."""
+    with open(path, "rb") as stream:
+        header, count, fields = [], 0, []
+        while True:
+            line = stream.readline().decode("ascii", "replace").strip()
+            header.append(line)
+            if line.startswith("element vertex"):
+                count = int(line.split()[2])
+            elif line.startswith("property"):
+                kind, name = line.split()[1:3]
+                if kind not in PLY_TYPES:
+                    sys.exit(f"make_survey_site: {path}: property {name} of type {kind} is not a scalar this reader knows")
+                fields.append((name, PLY_TYPES[kind]))
+            elif line == "end_header" or not line and len(header) > 100:
+                break
+        if "format binary_little_endian 1.0" not in header:
+            sys.exit(f"make_survey_site: {path}: expected a binary little-endian PLY")
+        vertices = np.fromfile(stream, dtype=np.dtype(fields), count=count)
+    if vertices.shape[0] != count:
+        sys.exit(f"make_survey_site: {path}: {vertices.shape[0]} of {count} vertices present (truncated)")
+    return np.column_stack([vertices["x"], vertices["y"], vertices["z"]]).astype(np.float64)
 
 
 def station_points(folder):
@@ -37,7 +63,7 @@ def station_points(folder):
     for scan in scans:
         pose_file = folder / scan.name.replace("scan_", "pose_").replace(".ply", ".txt")
         pose = np.loadtxt(pose_file).reshape(4, 4)
-        points = np.asarray(quadrix.read_cloud(scan).points, dtype=np.float64)
+        points = read_ply_positions(scan)
         clouds.append(points @ pose[:3, :3].T + pose[:3, 3])
     return np.concatenate(clouds)
 
