@@ -22,6 +22,7 @@
 #include <cmath>
 #include <limits>
 #include <new>
+#include <numeric>
 #include <tuple>
 #include <unordered_map>
 
@@ -766,7 +767,8 @@ std::vector<Element> elements_of_shapes(const std::vector<DetectedShape>& shapes
 /// a tenth of the largest one's points) becomes the Ground element, moved to the front, and its PCA
 /// plane fills the result's ground fields.
 void mark_ground_element(const std::vector<DetectedShape>& shapes, const Eigen::Matrix3Xd& points,
-                         const Eigen::Vector3d& up_direction, std::vector<Element>& elements, ExtractionResult& result) {
+                         const Eigen::Vector3d& up_direction, std::vector<Element>& elements,
+                         std::vector<detail::ShapeParameters>& parameters, ExtractionResult& result) {
   const Eigen::Vector3d up = up_direction.normalized();
   const double cos_ten_degrees = std::cos(10.0 * kPi / 180.0);
   std::size_t largest = 0;
@@ -797,12 +799,99 @@ void mark_ground_element(const std::vector<DetectedShape>& shapes, const Eigen::
   result.ground_normal = normal;
   result.ground_offset = -normal.dot(moments.mean());
   std::rotate(elements.begin(), elements.begin() + ground, elements.begin() + ground + 1);
+  std::rotate(parameters.begin(), parameters.begin() + ground, parameters.begin() + ground + 1);
 }
 
 }  // namespace
 
+namespace {
+
+/// Unit surface normal of a shape at p (the side does not matter to the refits).
+Eigen::Vector3d surface_normal(const DetectedShape& shape, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = p - shape.point;
+  const Eigen::Vector3d radial = d - d.dot(shape.axis) * shape.axis;
+  Eigen::Vector3d normal = shape.axis;
+  switch (shape.type) {
+    case QuadricType::CircularCylinder: normal = radial; break;
+    case QuadricType::Sphere: normal = d; break;
+    case QuadricType::CircularCone:
+      if (radial.norm() > 1e-12) normal = std::cos(shape.size) * radial.normalized() - std::sin(shape.size) * shape.axis;
+      break;
+    default: break;
+  }
+  return normal.norm() > 1e-12 ? Eigen::Vector3d(normal.normalized()) : Eigen::Vector3d(shape.axis);
+}
+
+}  // namespace
+
+namespace detail {
+
+std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const ShapeDetectionOptions& options,
+                                    const Eigen::Vector3d& up) {
+  std::vector<int> order(pieces.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return pieces[a].weight > pieces[b].weight; });
+  Eigen::Index total = 0;
+  for (const ShapePiece& piece : pieces) total += piece.points.cols();
+  Eigen::Matrix3Xd points(3, total), normals(3, total);
+  std::vector<DetectedShape> shapes(pieces.size());
+  std::vector<int> piece_of_point(static_cast<std::size_t>(total));
+  Eigen::Index column = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const ShapePiece& piece = pieces[static_cast<std::size_t>(order[k])];
+    DetectedShape& shape = shapes[k];
+    shape.type = piece.type;
+    shape.element_class = piece.type == QuadricType::Plane              ? ElementClass::Plane
+                          : piece.type == QuadricType::CircularCylinder ? ElementClass::Cylinder
+                          : piece.type == QuadricType::Sphere           ? ElementClass::Sphere
+                                                                        : ElementClass::Cone;
+    shape.axis = piece.axis.normalized();
+    shape.point = piece.point;
+    shape.size = piece.size;
+    for (Eigen::Index i = 0; i < piece.points.cols(); ++i, ++column) {
+      points.col(column) = piece.points.col(i);
+      normals.col(column) = surface_normal(shape, piece.points.col(i));
+      shape.members.push_back(static_cast<std::uint32_t>(column));
+      piece_of_point[static_cast<std::size_t>(column)] = static_cast<int>(k);
+    }
+    update_bounds(points, shape);
+  }
+  if (shapes.size() > 1) merge_similar_shapes(shapes, points, normals, options, up);
+  // Each sorted piece's first point tells which kept shape now holds it.
+  std::vector<int> holder_of_point(static_cast<std::size_t>(total), -1);
+  for (std::size_t k = 0; k < shapes.size(); ++k)
+    for (const std::uint32_t i : shapes[k].members) holder_of_point[i] = static_cast<int>(k);
+  std::vector<int> joined(pieces.size());
+  column = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const ShapePiece& piece = pieces[static_cast<std::size_t>(order[k])];
+    int holder = static_cast<int>(k);
+    if (piece.points.cols() > 0 && holder_of_point[static_cast<std::size_t>(column)] >= 0)
+      holder = holder_of_point[static_cast<std::size_t>(column)];
+    joined[static_cast<std::size_t>(order[k])] = order[static_cast<std::size_t>(holder)];
+    column += piece.points.cols();
+  }
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    if (shapes[k].members.empty()) continue;
+    ShapePiece& piece = pieces[static_cast<std::size_t>(order[k])];
+    piece.axis = shapes[k].axis;
+    piece.point = shapes[k].point;
+    piece.size = shapes[k].size;
+  }
+  return joined;
+}
+
+}  // namespace detail
+
 ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals,
                                const ExtractionOptions& options) {
+  return detail::detect_shapes_with_parameters(points, normals, options, nullptr);
+}
+
+namespace detail {
+
+ExtractionResult detect_shapes_with_parameters(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals,
+                                               const ExtractionOptions& options, std::vector<ShapeParameters>* parameters) {
   ExtractionResult result;
   const ShapeDetectionOptions& shape_options = options.shapes;
   const auto start = std::chrono::steady_clock::now();
@@ -855,10 +944,14 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
   result.timings_ms["shape_refinement"] = detail::elapsed_ms(stage);
 
   std::vector<Element> elements = elements_of_shapes(shapes, input.size(), representative_of_point);
-  if (shape_options.mark_ground) mark_ground_element(shapes, points, options.up, elements, result);
-  elements.erase(std::remove_if(elements.begin(), elements.end(), [](const Element& e) { return e.point_indices.empty(); }),
-                 elements.end());
-  result.elements = std::move(elements);
+  std::vector<ShapeParameters> shape_parameters;
+  for (const DetectedShape& shape : shapes) shape_parameters.push_back({shape.axis, shape.point, shape.size});
+  if (shape_options.mark_ground) mark_ground_element(shapes, points, options.up, elements, shape_parameters, result);
+  for (std::size_t id = 0; id < elements.size(); ++id) {
+    if (elements[id].point_indices.empty()) continue;
+    result.elements.push_back(std::move(elements[id]));
+    if (parameters != nullptr) parameters->push_back(shape_parameters[id]);
+  }
   if (result.elements.empty()) {
     result.status = ExtractionStatus::NoElements;
     result.message = "Efficient RANSAC found no shape with at least " + std::to_string(shape_options.minimum_points) +
@@ -870,4 +963,5 @@ ExtractionResult detect_shapes(const Eigen::Matrix3Xd& points, const Eigen::Matr
   return result;
 }
 
+}  // namespace detail
 }  // namespace quadrix

@@ -261,7 +261,8 @@ namespace {
 // Static scans: CGAL Efficient RANSAC shapes on the points in range (detect_shapes), with the
 // cloud's own normals when it carries nx, ny, nz.
 ExtractionResult extract_static_scan(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
-                                     const std::vector<std::uint32_t>& in_range, const ExtractionOptions& options) {
+                                     const std::vector<std::uint32_t>& in_range, const ExtractionOptions& options,
+                                     std::vector<ShapeParameters>* shape_parameters) {
   Eigen::Matrix3Xd normals;
   const auto nx = cloud.extra_fields.find("nx"), ny = cloud.extra_fields.find("ny"), nz = cloud.extra_fields.find("nz");
   if (nx != cloud.extra_fields.end() && ny != cloud.extra_fields.end() && nz != cloud.extra_fields.end()) {
@@ -270,7 +271,7 @@ ExtractionResult extract_static_scan(const Eigen::Matrix3Xd& points, const Point
       normals.col(static_cast<Eigen::Index>(i)) =
           Eigen::Vector3d(nx->second[in_range[i]], ny->second[in_range[i]], nz->second[in_range[i]]);
   }
-  ExtractionResult shapes = detect_shapes(detail::gather_points(points, in_range), normals, options);
+  ExtractionResult shapes = detect_shapes_with_parameters(detail::gather_points(points, in_range), normals, options, shape_parameters);
   for (Element& element : shapes.elements)
     for (std::uint32_t& index : element.point_indices) index = in_range[index];
   shapes.points_in_range = in_range.size();
@@ -423,7 +424,8 @@ std::string no_point_in_range_message(const Eigen::Matrix3Xd& points, const Extr
 }  // namespace
 
 ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
-                                            const ExtractionOptions& options, const std::vector<std::uint32_t>& labels) {
+                                            const ExtractionOptions& options, const std::vector<std::uint32_t>& labels,
+                                            std::vector<ShapeParameters>* shape_parameters) {
   const auto start = Clock::now();
   if (options.semantic_mode == SemanticMode::Labels && labels.size() != cloud.size())
     throw Error("labels semantic mode: " + std::to_string(labels.size()) + " labels for " +
@@ -473,7 +475,7 @@ ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, cons
     return result;
   }
   if (options.static_scan) {
-    ExtractionResult shapes = extract_static_scan(points, cloud, in_range, options);
+    ExtractionResult shapes = extract_static_scan(points, cloud, in_range, options, shape_parameters);
     shapes.timings_ms.insert(result.timings_ms.begin(), result.timings_ms.end());
     shapes.points_in_range = result.points_in_range;
     shapes.isolated_points = result.isolated_points;

@@ -116,15 +116,45 @@ bool plane_is_large_enough(const Moments& moments, std::size_t voxels, const Pla
 std::vector<std::uint32_t> dominant_cluster_plane(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& cluster,
                                                   const PlaneOptions& options, double minimum_fraction);
 
+/// Parameters of the shape behind a static-scan element (DetectedShape's, in the cloud's frame).
+struct ShapeParameters {
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();   ///< plane normal, cylinder or cone axis (unit)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< point on a plane, axis point, sphere centre, cone apex
+  double size = 0.0;                                 ///< cylinder or sphere radius (m), cone half-angle (radians)
+};
+
 /// extract_elements on `points` = cloud.positions as doubles (the caller already holds them), so a
-/// modelling run converts the cloud once.
+/// modelling run converts the cloud once. Static scans: `shape_parameters`, when given, gets the
+/// parameters of each element's shape, in the order of the elements.
 ExtractionResult extract_elements_of_points(const Eigen::Matrix3Xd& points, const PointCloud& cloud,
-                                            const ExtractionOptions& options, const std::vector<std::uint32_t>& labels);
+                                            const ExtractionOptions& options, const std::vector<std::uint32_t>& labels,
+                                            std::vector<ShapeParameters>* shape_parameters = nullptr);
+
+/// detect_shapes, also giving each element's shape parameters (when `parameters` is not null).
+ExtractionResult detect_shapes_with_parameters(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals,
+                                               const ExtractionOptions& options, std::vector<ShapeParameters>* parameters);
 
 /// CGAL Shape_detection region growing of planes on `candidates` (k nearest neighbours, PCA
 /// normals); defined in cgal_shape_detection.cpp. Returns the point-index sets of the regions.
 std::vector<std::vector<std::uint32_t>> cgal_region_growing_planes(const Eigen::Matrix3Xd& points,
                                                                    const std::vector<std::uint32_t>& candidates,
                                                                    const PlaneOptions& options);
+
+/// A piece of one detected shape (a tile's part of a primitive), for merge_shape_pieces.
+struct ShapePiece {
+  QuadricType type = QuadricType::Invalid;          ///< plane, circular cylinder, sphere or circular cone
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< as ShapeParameters::axis
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< as ShapeParameters::point
+  double size = 0.0;                                ///< as ShapeParameters::size
+  Eigen::Matrix3Xd points;                          ///< (an even sample of) its points
+  double weight = 0.0;                              ///< its full point count: heavier pieces are merged into first
+};
+
+/// Joins pieces of one shape by the rules detect_shapes applies to the pieces Efficient RANSAC
+/// returns (same type, close parameters, one shape refitted on both pieces' points explains them
+/// all; defined in cgal_shape_detection.cpp). Returns, for each piece, the index of the piece it
+/// joined (itself when it stays); kept pieces take the refitted parameters.
+std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const ShapeDetectionOptions& options,
+                                    const Eigen::Vector3d& up);
 
 }  // namespace quadrix::detail

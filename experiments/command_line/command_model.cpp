@@ -1,9 +1,12 @@
 // `quadrix model INPUT... [--poses P,...] --out model.json [--binary model.qsm] [--mesh model.ply]
 // [--elements elements.ply] [--picture model.png] [--preset P] [--sensor-origin X,Y,Z] [--labels FILE]
-// [--score-labels FILE] [--fitter NAME] [--no-page]`:
+// [--score-labels FILE] [--fitter NAME] [--no-page] [--tile-size M] [--memory-budget B] [--tile i/n]`
+// and `quadrix model merge PARTS... --out model.json`:
 // the paper's quadric-based scene representation of one cloud (or of TLS stations merged by pose)
 // (§"Quadric Extraction", §"Quadric Fitting", §"Quadric Modeling"). Beside model.json it writes the
-// interactive page model.html (quadrix view) unless --no-page.
+// interactive page model.html (quadrix view) unless --no-page. A static scan above the memory budget
+// (or with --tile-size) is modelled tile by tile (fitting/tiled_modelling.h); --tile i/n writes the
+// partial model of one group of tiles, which `model merge` joins.
 #include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/reports/interactive_page.h"
@@ -12,6 +15,7 @@
 #include "estimation/registration.h"
 #include "estimation/registration_config.h"
 #include "fitting/scene_modelling.h"
+#include "fitting/tiled_modelling.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 #include "geometry/mesh.h"
@@ -22,10 +26,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <chrono>
+#include <functional>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
+#include <unistd.h>
 
 namespace quadrix::cli {
 namespace {
@@ -49,6 +57,18 @@ struct ModelCommandOptions {
   double view_zoom = 1.0;             ///< picture zoom (> 1: closer)
   bool no_page = false;               ///< skip the interactive page beside --out
   std::vector<double> sensor_origin{0.0, 0.0, 0.0};  ///< where the sensor stood in the file's frame (one input, no --poses)
+  double tile_size = 0.0;             ///< static scans: tile edge, m (0: tiles only above the memory budget, sized from it)
+  std::string memory_budget = "2G";   ///< static scans: memory the modelling may hold (bytes, or with K, M, G)
+  std::string tile;                   ///< static scans: "i/n" models the i-th of n tile groups into a partial model (--out)
+};
+
+// Options of `quadrix model merge`.
+struct ModelMergeOptions {
+  std::vector<std::string> parts;     ///< partial models of `quadrix model --tile i/n`
+  std::string preset = "monument";    ///< preset the parts were modelled with (merge rules, fitter)
+  std::string fitter;                 ///< QuadricFitter registry name (empty: the preset's)
+  std::string out;                    ///< model JSON
+  std::string binary;                 ///< model binary (.qsm)
 };
 
 // A distinct colour per element (golden-ratio hue walk, full saturation).
@@ -317,7 +337,144 @@ void print_model_summary(const ModelCommandOptions& options, const ModellingOpti
   std::printf("\n");
 }
 
+// Bytes of "2G", "1500M", "512K" or a plain number of bytes.
+std::size_t parse_bytes(const std::string& text, const std::string& option) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  double unit = 1.0;
+  const std::string suffix = text.substr(std::min(used, text.size()));
+  if (suffix == "K" || suffix == "k") unit = 1024.0;
+  else if (suffix == "M" || suffix == "m") unit = 1024.0 * 1024.0;
+  else if (suffix == "G" || suffix == "g") unit = 1024.0 * 1024.0 * 1024.0;
+  else if (!suffix.empty()) used = 0;
+  if (used == 0 || !(value > 0.0) || !std::isfinite(value * unit))
+    throw Error(option + ": expected a positive size in bytes, optionally with K, M or G (2G), got '" + text + "'");
+  return static_cast<std::size_t>(value * unit);
+}
+
+// Tiled modelling's progress on a terminal (stderr): pass, tiles done, points per second, time
+// left; nothing when stderr is not a terminal (logs).
+std::function<void(const TilingProgress&)> terminal_progress() {
+  if (isatty(STDERR_FILENO) == 0) return {};
+  struct State {
+    int pass = 0;
+    std::chrono::steady_clock::time_point shown;
+  };
+  auto state = std::make_shared<State>();
+  return [state](const TilingProgress& progress) {
+    const auto now = std::chrono::steady_clock::now();
+    const bool last = progress.pass == 2 && progress.tiles_done == progress.tiles_total;
+    if (progress.pass == state->pass && !last && now - state->shown < std::chrono::milliseconds(250)) return;
+    if (progress.pass != state->pass && state->pass != 0) std::fprintf(stderr, "\n");
+    state->pass = progress.pass;
+    state->shown = now;
+    const double rate = progress.seconds > 0.0 ? static_cast<double>(progress.points_done) / progress.seconds / 1e6 : 0.0;
+    if (progress.pass == 1) {
+      std::fprintf(stderr, "\rpass 1/3 binning: %.1f M points, %.2f M points/s   ", static_cast<double>(progress.points_done) / 1e6, rate);
+    } else if (progress.pass == 2) {
+      const double left = progress.points_done > 0 && progress.points_total > progress.points_done
+                              ? progress.seconds * static_cast<double>(progress.points_total - progress.points_done) /
+                                    static_cast<double>(progress.points_done)
+                              : 0.0;
+      std::fprintf(stderr, "\rpass 2/3 modelling tiles: %zu/%zu, %.2f M points/s, %.0f s left   ", progress.tiles_done,
+                   progress.tiles_total, rate, left);
+    } else {
+      std::fprintf(stderr, "\rpass 3/3 merging the pieces of %zu tiles\n", progress.tiles_total);
+      state->pass = 0;
+    }
+    std::fflush(stderr);
+  };
+}
+
+// Quadrics of a model per class and type.
+std::map<std::pair<std::string, std::string>, int> quadric_counts_of(const SceneModel& model) {
+  std::map<std::pair<std::string, std::string>, int> counts;
+  for (std::size_t i = 0; i < model.augmented_begin; ++i)
+    ++counts[{element_class_name(element_class_from_label(model.records[i].label)), quadric_type_name(model.types[i])}];
+  return counts;
+}
+
+// Writes a merged tiled model (--out JSON, --binary) and prints its summary.
+void write_tiled_model(const std::string& out, const std::string& binary, const std::string& source, std::size_t inputs,
+                       const std::string& preset, const std::string& fitter, const ModellingResult& result,
+                       const std::string& tiling_json) {
+  const SceneModel& model = result.model;
+  const auto counts = quadric_counts_of(model);
+  std::string extra = "\"input\": " + nlohmann::json(source).dump() + ", \"inputs\": " + std::to_string(inputs) +
+                      ", \"preset\": \"" + preset + "\", \"fitter\": \"" + fitter + "\", \"status\": \"" +
+                      modelling_status_name(result.status) + "\", \"tiling\": " + tiling_json;
+  write_scene_model_json(out, model, extra);
+  if (!binary.empty()) write_scene_model_binary(binary, model);
+  std::printf("quadrix model %s  (%zu points, tile by tile, preset %s, fitter %s)\n", source.c_str(), model.source_point_count,
+              preset.c_str(), fitter.c_str());
+  std::printf("status: %s%s%s\n\n", modelling_status_name(result.status).c_str(), result.message.empty() ? "" : " - ",
+              result.message.c_str());
+  std::printf("%-12s %-20s %9s\n", "class", "type", "quadrics");
+  for (const auto& [key, count] : counts) std::printf("%-12s %-20s %9d\n", key.first.c_str(), key.second.c_str(), count);
+  std::printf("%-12s %-20s %9zu\n\ntimings (ms, 2 shared cores):", "total", "", model.size());
+  for (const char* stage : {"tiles", "merge", "fitting", "total"}) {
+    const auto it = model.timings_ms.find(stage);
+    if (it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);
+  }
+  std::printf("\nwrote %s%s%s\n", out.c_str(), binary.empty() ? "" : ", ", binary.c_str());
+}
+
+// A static scan tile by tile: the whole model, or with --tile i/n the partial model of one group.
+void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction, const ModellingOptions& modelling,
+               const PointCloud& cloud, const Eigen::Vector3d& sensor_origin, TilingOptions tiling) {
+  for (const auto& [flag, value] : std::initializer_list<std::pair<const char*, const std::string*>>{
+           {"--labels", &options.labels}, {"--score-labels", &options.score_labels}, {"--mesh", &options.mesh},
+           {"--elements", &options.elements}, {"--picture", &options.picture}})
+    if (!value->empty())
+      throw Error(std::string(flag) + ": not available tile by tile (it needs every element's points in memory); "
+                  "model whole with a larger --memory-budget");
+  extraction.sensor_origin = sensor_origin;  // tiles are modelled relative to their corners, in the file's frame
+  tiling.progress = terminal_progress();
+  const std::string source = std::filesystem::path(options.inputs.front()).filename().string() +
+                             (options.inputs.size() > 1 ? " + " + std::to_string(options.inputs.size() - 1) + " more" : "");
+  MatrixChunkSource points(cloud.positions, source);
+  if (tiling.groups > 1) {
+    const PartialModel part = model_tile_group(points, extraction, tiling);
+    write_partial_model(options.out, part);
+    std::printf("quadrix model %s: tile group %d/%d, %llu tiles of %.1f m, %llu of %llu points, %zu shape pieces; wrote %s "
+                "(join the parts with `quadrix model merge`)\n",
+                source.c_str(), part.group + 1, part.groups, static_cast<unsigned long long>(part.tiles), part.tile_size,
+                static_cast<unsigned long long>(part.group_points), static_cast<unsigned long long>(part.survey_points),
+                part.pieces.size(), options.out.c_str());
+    return;
+  }
+  const ModellingResult result = model_tiled(points, extraction, modelling, tiling);
+  const nlohmann::json tiling_json = {{"tile_size", tiling.tile_size}, {"margin", tiling.margin},
+                                      {"memory_budget", tiling.memory_budget}};
+  write_tiled_model(options.out, options.binary, source, options.inputs.size(), options.preset, modelling.fitter, result,
+                    tiling_json.dump());
+}
+
+void run_merge(const ModelMergeOptions& options) {
+  const ExtractionOptions extraction = extraction_preset(options.preset);
+  if (!extraction.static_scan) throw Error("model merge --preset: tiles are a static scan's (monument), got '" + options.preset + "'");
+  ModellingOptions modelling = registration_preset(options.preset).modelling;
+  if (!options.fitter.empty()) modelling.fitter = options.fitter;
+  make_quadric_fitter(modelling.fitter);
+  std::vector<PartialModel> parts;
+  for (const std::string& path : options.parts) parts.push_back(read_partial_model(path));
+  const auto start = std::chrono::steady_clock::now();
+  ModellingResult result = merge_partial_models(parts, extraction, modelling);
+  result.model.timings_ms["total"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const nlohmann::json tiling_json = {{"tile_size", parts.front().tile_size}, {"margin", parts.front().margin},
+                                      {"groups", parts.front().groups}};
+  write_tiled_model(options.out, options.binary, std::filesystem::path(options.parts.front()).filename().string(),
+                    options.parts.size(), options.preset, modelling.fitter, result, tiling_json.dump());
+}
+
 void run(const ModelCommandOptions& options) {
+  if (options.inputs.empty()) throw Error("model: INPUT is required (or `quadrix model merge PARTS... --out M`)");
+  if (options.out.empty()) throw Error("model: --out is required");
   ExtractionOptions extraction = extraction_preset(options.preset);
   if (options.plane_method == "cgal")
     extraction.planes.method = PlaneMethod::CgalRegionGrowing;
@@ -344,6 +501,17 @@ void run(const ModelCommandOptions& options) {
                  {"--picture", options.picture},
                  {"the page beside --out (--no-page skips it)", model_page_path(options)}},
                 inputs);
+  // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
+  if (extraction.static_scan) modelling.quadrics_per_class = std::numeric_limits<int>::max();
+  TilingOptions tiling;
+  if (!(options.tile_size >= 0.0) || !std::isfinite(options.tile_size))
+    throw Error("--tile-size: expected a tile edge > 0 m (0: tiles only above --memory-budget)");
+  tiling.tile_size = options.tile_size;
+  tiling.memory_budget = parse_bytes(options.memory_budget, "--memory-budget");
+  if (!options.tile.empty()) parse_tile_group(options.tile, tiling.group, tiling.groups);
+  if (!extraction.static_scan && (options.tile_size > 0.0 || !options.tile.empty()))
+    throw Error("--tile-size, --tile: tile-by-tile modelling is for static scans (--preset monument), not preset '" +
+                options.preset + "'");
 
   CloudReadOptions read_options;
   read_options.format = cloud_format_from_name(options.format);
@@ -356,6 +524,10 @@ void run(const ModelCommandOptions& options) {
   if (centred && (options.inputs.size() != 1 || !options.poses.empty()))
     throw Error("--sensor-origin: takes one input without --poses (stations merged by pose are modelled in the world frame)");
   const PointCloud cloud = read_merged_clouds(options, read_options);
+  if (extraction.static_scan && (options.tile_size > 0.0 || !options.tile.empty() || tiling_needed(cloud.size(), tiling))) {
+    run_tiled(options, extraction, modelling, cloud, sensor_origin, tiling);
+    return;
+  }
   // A cloud in a map's frame is modelled centred on its sensor (the extraction measures ranges and
   // heights from the origin), and the model is moved back: every output is in the file's frame.
   const PointCloud centred_cloud = centred ? centred_on_sensor(cloud, sensor_origin) : PointCloud();
@@ -408,8 +580,7 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   auto options = std::make_shared<ModelCommandOptions>();
   CLI::App* command = app.add_subcommand(
       "model", "Model a point cloud with quadrics (paper's scene representation) and write JSON/binary/mesh");
-  command->add_option("input", options->inputs, "Point cloud (any supported format); several with --poses are merged")
-      ->required();
+  command->add_option("input", options->inputs, "Point cloud (any supported format); several with --poses are merged");
   command->add_option("--poses", options->poses,
                       "Sensor-to-world pose file (4x4) per input, comma-separated: the inputs are merged in the world "
                       "frame (TLS stations)")
@@ -436,7 +607,7 @@ const CommandRegistration registration(50, [](CLI::App& app) {
       ->capture_default_str();
   command->add_option("--format", options->format, "Input format override (see `quadrix info --help`)")
       ->capture_default_str();
-  command->add_option("--out", options->out, "Model JSON (quadrics array + stats)")->required();
+  command->add_option("--out", options->out, "Model JSON (quadrics array + stats); with --tile, the partial model");
   command->add_option("--binary", options->binary, "Compact binary model (.qsm)");
   command->add_option("--mesh", options->mesh, "PLY mesh of every fitted quadric inside its extent, coloured by type");
   command->add_option("--elements", options->elements, "PLY of the element points, coloured per element");
@@ -447,7 +618,28 @@ const CommandRegistration registration(50, [](CLI::App& app) {
       ->capture_default_str();
   command->add_option("--view-zoom", options->view_zoom, "Picture zoom (> 1 moves the camera closer)")->capture_default_str();
   command->add_flag("--no-page", options->no_page, "Do not write the interactive page (--out with .html) beside the JSON");
-  command->callback([options] { run(*options); });
+  command->add_option("--tile-size", options->tile_size,
+                      "Static scans: model tile by tile with square tiles of this edge in x-y, m (default: tiles only "
+                      "when the whole cloud would exceed --memory-budget, sized from it)");
+  command->add_option("--memory-budget", options->memory_budget,
+                      "Static scans: memory the modelling may hold, bytes or with K, M, G; above it the scan is modelled "
+                      "tile by tile")
+      ->capture_default_str();
+  command->add_option("--tile", options->tile,
+                      "Static scans: model only the i-th of n tile groups (i/n) and write its partial model to --out; "
+                      "join the n parts with `quadrix model merge`");
+  auto merge = std::make_shared<ModelMergeOptions>();
+  CLI::App* merge_command = command->add_subcommand(
+      "merge", "Join the partial models of `quadrix model --tile i/n` (every i once) into one model");
+  merge_command->add_option("parts", merge->parts, "Partial models, one per tile group")->required();
+  merge_command->add_option("--preset", merge->preset, "Preset the parts were modelled with")->capture_default_str();
+  merge_command->add_option("--fitter", merge->fitter, "Quadric fitter (default: the preset's)");
+  merge_command->add_option("--out", merge->out, "Model JSON")->required();
+  merge_command->add_option("--binary", merge->binary, "Compact binary model (.qsm)");
+  merge_command->callback([merge] { run_merge(*merge); });
+  command->callback([options, merge_command] {
+    if (!merge_command->parsed()) run(*options);
+  });
 });
 
 }  // namespace

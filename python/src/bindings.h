@@ -97,5 +97,6 @@ void bind_config(py::module_& module);    ///< config, config_schema, config_key
 void bind_models(py::module_& module);    ///< Model, model, load_model, fit
 void bind_register(py::module_& module);  ///< RegistrationResult, register
 void bind_synth(py::module_& module);     ///< synth, scenes, sensors
+void bind_tiles(py::module_& module);     ///< model_tiles, merge_tiles, model_tiled
 
 }  // namespace quadrix::python

@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 
 namespace quadrix::python {
 
@@ -187,6 +188,8 @@ when it is not a valid model (bad magic, truncation, checksum mismatch, invalid 
         if (!point_labels.empty()) extraction.semantic_mode = SemanticMode::Labels;
         if (!fitter.is_none()) options.modelling.fitter = fitter.cast<std::string>();
         make_quadric_fitter(options.modelling.fitter);  // an Error listing the fitters for an unknown name
+        // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
+        if (extraction.static_scan) options.modelling.quadrics_per_class = std::numeric_limits<int>::max();
         auto result = std::make_shared<Model>();
         {
           py::gil_scoped_release release;

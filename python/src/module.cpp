@@ -32,6 +32,7 @@ input (the message names the file, line or key). Heavy calls release the GIL.
   quadrix::python::bind_clouds(module);
   quadrix::python::bind_config(module);
   quadrix::python::bind_models(module);
+  quadrix::python::bind_tiles(module);
   quadrix::python::bind_register(module);
   quadrix::python::bind_synth(module);
   module.attr("__version__") = QUADRIX_VERSION;

@@ -1,0 +1,143 @@
+// Tile-by-tile modelling of large static scans (beyond the paper, whose Pantheon fits in memory):
+// pass 1 bins the points into square tiles of the horizontal plane on disk (a temporary folder,
+// removed afterwards, also on error); pass 2 extracts the static-scan shapes of each tile with a
+// margin of overlap (paper §"Quadric Extraction", CGAL Efficient RANSAC), tiles in parallel; pass 3
+// joins the pieces of one primitive cut by tile borders with the rules detect_shapes applies to
+// the pieces of one shape, and fits one quadric per primitive (paper §"Quadric Fitting", Eq. (full
+// attributes)). Memory grows with a tile, not with the survey. Passes 1 and 2 of one group of
+// tiles give a PartialModel, so a survey can be split over processes or machines and merged.
+#pragma once
+
+#include "fitting/extraction.h"
+#include "fitting/scene_model.h"
+#include "fitting/scene_modelling.h"
+#include "geometry/point_cloud.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace quadrix {
+
+/// A source of points read chunk by chunk (positions in the file's frame, metres).
+class PointChunkSource {
+ public:
+  virtual ~PointChunkSource() = default;
+  /// Fills `chunk` (3 x n) with the next n <= `maximum` points; false when none are left.
+  virtual bool next_chunk(Eigen::Matrix3Xd& chunk, std::size_t maximum) = 0;
+  /// Starts again from the first point (the tiler reads once more when it sizes tiles itself).
+  virtual void rewind() = 0;
+  /// What the points come from, for messages (a file name).
+  virtual std::string name() const = 0;
+};
+
+/// Points already in memory as a chunk source (a cloud, or several moved into one frame).
+class MatrixChunkSource : public PointChunkSource {
+ public:
+  /// Serves the columns of `points` (kept by reference: it must outlive the source).
+  MatrixChunkSource(const Eigen::Matrix3Xf& points, std::string name);
+  bool next_chunk(Eigen::Matrix3Xd& chunk, std::size_t maximum) override;
+  void rewind() override { next_ = 0; }
+  std::string name() const override { return name_; }
+
+ private:
+  const Eigen::Matrix3Xf& points_;
+  std::string name_;
+  Eigen::Index next_ = 0;
+};
+
+/// Where the tiler is, for a progress display.
+struct TilingProgress {
+  int pass = 1;                       ///< 1 binning, 2 modelling tiles, 3 merging
+  std::size_t points_done = 0;        ///< pass 1: points binned; pass 2: points of the tiles modelled
+  std::size_t points_total = 0;       ///< points of the survey (pass 2: of this group's tiles; 0 when unknown)
+  std::size_t tiles_done = 0;         ///< pass 2: tiles modelled
+  std::size_t tiles_total = 0;        ///< pass 2: tiles of this group
+  double seconds = 0.0;               ///< time since the pass began, s
+};
+
+/// Options of tiled modelling.
+struct TilingOptions {
+  double tile_size = 0.0;             ///< edge of a square tile in the x-y plane, m (0: chosen from memory_budget)
+  double margin = 2.0;                ///< each tile is modelled with the points this far beyond its edges, m (at least cluster_epsilon, so a shape cut by the edge keeps its connected piece on both sides)
+  std::size_t memory_budget = std::size_t{2} << 30;  ///< bytes the modelling may hold at once (default 2 GiB: a 2-core 24 GB machine shared with other work)
+  int threads = 0;                    ///< tiles modelled at once (0: every core, within memory_budget)
+  int group = 0;                      ///< this process models tile group `group` of `groups` (0-based)
+  int groups = 1;                     ///< number of tile groups the survey is split into
+  std::string temporary_parent;       ///< folder in which the tile folder is made (empty: the system's temporary folder)
+  std::size_t sample_points = 4000;   ///< points kept per primitive piece for the merge refits and the final fit (ModellingOptions::maximum_fit_points)
+  std::function<void(const TilingProgress&)> progress;  ///< called as the passes advance (may be empty)
+};
+
+/// Bytes a whole-cloud static-scan modelling holds per point (cloud, double copy, simplification,
+/// element indices, CGAL's structures): the simulated monument peaked at about 130 bytes a point.
+inline constexpr double kWholeModellingBytesPerPoint = 130.0;
+
+/// Whether a survey of `points` points should be modelled tile by tile: its whole modelling would
+/// exceed the memory budget.
+bool tiling_needed(std::size_t points, const TilingOptions& options);
+
+/// One primitive piece of a tile: what the merge and the final fit need. Coordinates are in the
+/// file's frame; the moments and the sample hold the points of the tile's core only, so a point
+/// the margins share is counted once.
+struct TilePiece {
+  ElementClass element_class = ElementClass::Plane;  ///< class the tile's extraction gave (ground, plane, cylinder, sphere, cone)
+  QuadricType type = QuadricType::Invalid;           ///< detected shape type
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();   ///< shape parameters of the tile's detection: plane normal, cylinder or cone axis
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< point on a plane, axis point, sphere centre, cone apex
+  double size = 0.0;                                 ///< cylinder or sphere radius (m), cone half-angle (radians)
+  std::uint64_t point_count = 0;                     ///< core points of the piece
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();    ///< mean of those points
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero(); ///< sum of (p - mean)(p - mean)^T over them
+  Eigen::Matrix3Xd sample;                           ///< at most TilingOptions::sample_points of them, evenly strided
+};
+
+/// Passes 1 and 2 for one group of tiles: what `quadrix model --tile i/n` writes.
+struct PartialModel {
+  int group = 0;                      ///< tile group modelled
+  int groups = 1;                     ///< number of groups
+  double tile_size = 0.0;             ///< tile edge used, m
+  double margin = 0.0;                ///< margin used, m
+  std::uint64_t survey_points = 0;    ///< points of the whole survey
+  std::uint64_t group_points = 0;     ///< core points of this group's tiles
+  std::uint64_t tiles = 0;            ///< tiles of this group holding points
+  std::vector<TilePiece> pieces;      ///< every primitive piece of those tiles
+};
+
+/// Passes 1 and 2: bins `source` into tiles (TilingOptions::tile_size, or sized from the budget with
+/// one more read of the source) and extracts the static-scan shapes (extraction.static_scan must be
+/// set) of the tiles of group options.group. Throws quadrix::Error on bad options or when a tile
+/// file cannot be written (the temporary folder is removed either way).
+PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions& extraction, const TilingOptions& options);
+
+/// Pass 3: joins the partial models of every group (each exactly once, same tile size and margin,
+/// else quadrix::Error naming the problem), merges pieces cut by tile borders, fits each primitive
+/// with modelling.fitter and returns the model. No per-class cap (K_e) and no augmented points: a
+/// static-scan model keeps every primitive it finds. The returned result's extraction and
+/// record_elements are empty (the points are not held).
+ModellingResult merge_partial_models(const std::vector<PartialModel>& parts, const ExtractionOptions& extraction,
+                                     const ModellingOptions& modelling, const TilingOptions& options = {});
+
+/// All three passes in one process.
+ModellingResult model_tiled(PointChunkSource& source, const ExtractionOptions& extraction, const ModellingOptions& modelling,
+                            const TilingOptions& options);
+
+/// Writes a partial model (binary, little-endian, magic "QDXTILES" version 1) atomically.
+void write_partial_model(const std::string& path, const PartialModel& part);
+/// Reads a partial model; throws quadrix::Error naming the file and what is wrong.
+PartialModel read_partial_model(const std::string& path);
+
+/// A partial model as the bytes write_partial_model writes (to hand between processes).
+std::string partial_model_to_bytes(const PartialModel& part);
+/// Parses partial_model_to_bytes's output; throws quadrix::Error naming `name` and what is wrong.
+PartialModel partial_model_from_bytes(const std::string& bytes, const std::string& name);
+
+/// Parses "i/n" (1 <= i <= n) of `--tile` into a 0-based group and the group count; throws
+/// quadrix::Error otherwise.
+void parse_tile_group(const std::string& text, int& group, int& groups);
+
+}  // namespace quadrix

@@ -1,0 +1,182 @@
+// Tile-by-tile modelling: a small static scene whose tile border cuts through a pipe (cylinder), a
+// wall and the floor; the pieces on both sides merge back into one primitive each, as the whole
+// cloud gives, whatever the split into tile groups.
+#include "fitting/extraction.h"
+#include "fitting/tiled_modelling.h"
+#include "geometry/constants.h"
+#include "geometry/error.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+#include <random>
+
+#include <unistd.h>
+
+namespace quadrix {
+namespace {
+
+// Floor 23.8 x 10 m (z = 0, y in [1, 11]), a wall at y = 11 (4 m high) and a pipe of radius 0.5 m
+// along x at y = 6, z = 1.5, from x = -10 to 10; the tile border x = 0 cuts all three.
+Eigen::Matrix3Xf make_scene(std::uint64_t seed) {
+  std::mt19937_64 engine(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.004);
+  std::vector<Eigen::Vector3d> points;
+  const auto add = [&](const Eigen::Vector3d& p) { points.push_back(p + Eigen::Vector3d(noise(engine), noise(engine), noise(engine))); };
+  const auto count = [](double area) { return static_cast<int>(area * 150.0); };
+  for (int i = 0; i < count(238.0); ++i) add({-11.9 + 23.8 * unit(engine), 1.0 + 10.0 * unit(engine), 0.0});
+  for (int i = 0; i < count(95.2); ++i) add({-11.9 + 23.8 * unit(engine), 11.0, 4.0 * unit(engine)});
+  for (int i = 0; i < count(2.0 * kPi * 0.5 * 20.0); ++i) {
+    const double angle = 2.0 * kPi * unit(engine);
+    add({-10.0 + 20.0 * unit(engine), 6.0 + 0.5 * std::cos(angle), 1.5 + 0.5 * std::sin(angle)});
+  }
+  Eigen::Matrix3Xf matrix(3, static_cast<Eigen::Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) matrix.col(static_cast<Eigen::Index>(i)) = points[i].cast<float>();
+  return matrix;
+}
+
+ExtractionOptions scene_extraction() {
+  ExtractionOptions options = extraction_preset("monument");
+  options.shapes = ShapeDetectionOptions();  // small-scene defaults (the preset is scaled for a 160 m monument)
+  options.sensor_origin = Eigen::Vector3d(0.0, 3.0, 1.7);
+  return options;
+}
+
+ModellingOptions scene_modelling() {
+  ModellingOptions options;
+  options.fitter = "constrained";
+  return options;
+}
+
+std::map<QuadricType, int> type_counts(const SceneModel& model) {
+  std::map<QuadricType, int> counts;
+  for (std::size_t i = 0; i < model.augmented_begin; ++i) ++counts[model.types[i]];
+  return counts;
+}
+
+class TiledModelling : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    folder = std::filesystem::temp_directory_path() / ("quadrix_test_tiles_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(folder);
+    std::filesystem::create_directories(folder);
+    tiling.tile_size = 12.0;
+    tiling.margin = 1.0;
+    tiling.temporary_parent = folder.string();
+  }
+  void TearDown() override { std::filesystem::remove_all(folder); }
+  std::filesystem::path folder;
+  TilingOptions tiling;
+};
+
+TEST_F(TiledModelling, PiecesCutByATileBorderMergeBackIntoOnePrimitiveEach) {
+  const Eigen::Matrix3Xf points = make_scene(3);
+  // The whole cloud: the floor (ground), the wall and the pipe.
+  PointCloud cloud;
+  cloud.positions = points;
+  const ExtractionResult whole = extract_elements(cloud, scene_extraction());
+  std::map<QuadricType, int> whole_counts;
+  for (const Element& element : whole.elements) ++whole_counts[element.detected_type];
+  EXPECT_EQ(whole_counts[QuadricType::CircularCylinder], 1);
+  EXPECT_EQ(whole_counts[QuadricType::Plane], 2);
+
+  // Passes 1 and 2: the border at x = 0 leaves a piece of each primitive in both tiles.
+  MatrixChunkSource source(points, "scene");
+  const PartialModel part = model_tile_group(source, scene_extraction(), tiling);
+  EXPECT_EQ(part.tiles, 2u);
+  EXPECT_EQ(part.survey_points, static_cast<std::uint64_t>(points.cols()));
+  std::map<QuadricType, int> piece_counts;
+  std::uint64_t piece_points = 0;
+  for (const TilePiece& piece : part.pieces) ++piece_counts[piece.type], piece_points += piece.point_count;
+  EXPECT_GE(piece_counts[QuadricType::CircularCylinder], 2);
+  EXPECT_GE(piece_counts[QuadricType::Plane], 4);
+  EXPECT_LE(piece_points, part.survey_points);  // margins are not counted twice
+  // The tile files are gone.
+  EXPECT_TRUE(std::filesystem::is_empty(folder));
+
+  // Pass 3: one cylinder and two planes, the pipe's radius and axis as built.
+  const ModellingResult merged = merge_partial_models({part}, scene_extraction(), scene_modelling());
+  const std::map<QuadricType, int> counts = type_counts(merged.model);
+  EXPECT_EQ(counts.count(QuadricType::CircularCylinder) ? counts.at(QuadricType::CircularCylinder) : 0,
+            whole_counts[QuadricType::CircularCylinder]);
+  EXPECT_EQ(counts.count(QuadricType::Plane) ? counts.at(QuadricType::Plane) : 0, whole_counts[QuadricType::Plane]);
+  EXPECT_TRUE(merged.model.has_ground);
+  EXPECT_GT(merged.model.ground_normal.z(), 0.999);
+  EXPECT_NEAR(merged.model.ground_offset, 0.0, 0.01);
+  for (std::size_t i = 0; i < merged.model.augmented_begin; ++i) {
+    if (merged.model.types[i] != QuadricType::CircularCylinder) continue;
+    const QuadricDecomposition shape = merged.model.records[i].quadric().decompose();
+    EXPECT_NEAR(shape.scale.x(), 0.5, 0.02);
+    EXPECT_GT(std::abs(shape.rotation.col(2).x()), 0.999);  // the axis runs along x
+    // One primitive holds the pipe's points from both tiles (its 9.4k points, not half of them).
+    EXPECT_GT(merged.model.element_point_counts[i], 0.9 * 150.0 * 2.0 * kPi * 0.5 * 20.0);
+  }
+}
+
+TEST_F(TiledModelling, AnySplitIntoTileGroupsGivesTheSameModel) {
+  const Eigen::Matrix3Xf points = make_scene(4);
+  MatrixChunkSource source(points, "scene");
+  tiling.tile_size = 6.0;  // four tiles across x: borders at x = -6, 0 and 6 cut the pipe, the wall and the floor
+  const ModellingResult small_tiles = model_tiled(source, scene_extraction(), scene_modelling(), tiling);
+  std::vector<PartialModel> parts;
+  for (int group = 0; group < 3; ++group) {
+    TilingOptions split = tiling;
+    split.group = group;
+    split.groups = 3;
+    const std::string path = (folder / ("part" + std::to_string(group) + ".tiles")).string();
+    write_partial_model(path, model_tile_group(source, scene_extraction(), split));
+    parts.push_back(read_partial_model(path));
+  }
+  const ModellingResult split = merge_partial_models(parts, scene_extraction(), scene_modelling());
+  ASSERT_EQ(split.model.size(), small_tiles.model.size());
+  for (std::size_t i = 0; i < split.model.size(); ++i) {
+    EXPECT_EQ(split.model.types[i], small_tiles.model.types[i]);
+    const auto a = split.model.records[i].to_array(), b = small_tiles.model.records[i].to_array();
+    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-9) << "record " << i << " value " << k;
+  }
+  // Four pieces of each merge back into one pipe, one wall and the ground.
+  EXPECT_EQ(type_counts(small_tiles.model)[QuadricType::CircularCylinder], 1);
+  EXPECT_EQ(type_counts(small_tiles.model)[QuadricType::Plane], 2);
+
+  // A missing part or one given twice is an error naming it.
+  parts.pop_back();
+  EXPECT_THROW(merge_partial_models(parts, scene_extraction(), scene_modelling()), Error);
+  parts.push_back(parts.front());
+  EXPECT_THROW(merge_partial_models(parts, scene_extraction(), scene_modelling()), Error);
+}
+
+TEST_F(TiledModelling, BadInputIsAClearError) {
+  int group = 0, groups = 0;
+  parse_tile_group("2/5", group, groups);
+  EXPECT_EQ(group, 1);
+  EXPECT_EQ(groups, 5);
+  for (const char* text : {"0/3", "4/3", "1/0", "a/b", "2", "1/2x"}) EXPECT_THROW(parse_tile_group(text, group, groups), Error) << text;
+  const std::string path = (folder / "truncated.tiles").string();
+  PartialModel part;
+  part.tile_size = 10.0;
+  TilePiece piece;
+  piece.type = QuadricType::Plane;
+  piece.point_count = 3;
+  piece.sample = Eigen::Matrix3Xd::Identity(3, 3);
+  part.pieces.push_back(piece);
+  write_partial_model(path, part);
+  EXPECT_EQ(read_partial_model(path).pieces.size(), 1u);
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) - 7);
+  try {
+    read_partial_model(path);
+    FAIL() << "a truncated partial model was read";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("truncated"), std::string::npos) << error.what();
+  }
+  const Eigen::Matrix3Xf points = make_scene(5);
+  MatrixChunkSource source(points, "scene");
+  ExtractionOptions lidar = extraction_preset("vlp64");
+  EXPECT_THROW(model_tile_group(source, lidar, tiling), Error);
+  tiling.tile_size = 1.5;  // not wider than two margins
+  EXPECT_THROW(model_tile_group(source, scene_extraction(), tiling), Error);
+}
+
+}  // namespace
+}  // namespace quadrix
