@@ -213,18 +213,12 @@ MapBaselineSummary run_map_baseline(const std::string& method, const std::string
 
   for (const Session& session : sessions) {
     const std::size_t first_edge = edges.size();
-    // Odometry edges: the given odometry (multiway: refined by ICP from it, as Open3D's multiway example does).
+    // Odometry edges: the given odometry, for every method, so that the methods differ only in their loop edges.
     std::vector<Eigen::Isometry3d> initial(session.rows.size());
     initial[0] = rows[session.rows[0]].odometry;
     for (std::size_t k = 0; k + 1 < session.rows.size(); ++k) {
       const std::size_t a = session.rows[k], b = session.rows[k + 1];
       Edge edge{a, b, "odometry", "ok", true, rows[b].odometry.inverse() * rows[a].odometry};
-      if (method == "multiway") {
-        const auto result = icp(a, b, edge.transform);
-        edge.transform.matrix() = result.transformation_;
-        edge.fitness = result.fitness_;
-        edge.rmse = result.inlier_rmse_;
-      }
       initial[k + 1] = initial[k] * edge.transform.inverse();
       edges.push_back(edge);
     }
@@ -245,7 +239,9 @@ MapBaselineSummary run_map_baseline(const std::string& method, const std::string
           Edge edge{from, to, "loop", "rejected", false, Eigen::Isometry3d(result.transformation_)};
           edge.fitness = result.fitness_;
           edge.rmse = result.inlier_rmse_;
-          if (method == "icp-loops") {
+          if (result.correspondence_set_.size() < 3) {
+            edge.status = "failed";  // no overlap within icp_distance of the odometry's guess: nothing to add
+          } else if (method == "icp-loops") {
             const bool pass = result.fitness_ >= options.min_fitness && result.inlier_rmse_ <= options.max_rmse;
             edge.status = pass ? "ok" : "rejected";
             edge.used = pass;
@@ -260,7 +256,10 @@ MapBaselineSummary run_map_baseline(const std::string& method, const std::string
     // The session's pose graph: node k = sensor k -> session frame (node 0 fixed), Open3D's convention.
     std::vector<Eigen::Isometry3d> optimised = initial;
     bool has_loop = false;
-    for (std::size_t e = first_edge; e < edges.size(); ++e) has_loop = has_loop || (edges[e].kind == "loop" && (edges[e].used || method == "multiway"));
+    const auto enters_graph = [&](const Edge& edge) {
+      return edge.kind == "odometry" || edge.used || (method == "multiway" && edge.status == "candidate");
+    };
+    for (std::size_t e = first_edge; e < edges.size(); ++e) has_loop = has_loop || (edges[e].kind == "loop" && enters_graph(edges[e]));
     if (has_loop) {
       std::map<std::size_t, int> node_of;
       o3d_registration::PoseGraph graph;
@@ -271,7 +270,7 @@ MapBaselineSummary run_map_baseline(const std::string& method, const std::string
       std::vector<std::size_t> graph_edges;  // edges[] index of each graph edge
       for (std::size_t e = first_edge; e < edges.size(); ++e) {
         const Edge& edge = edges[e];
-        if (edge.kind == "loop" && !edge.used && method != "multiway") continue;
+        if (!enters_graph(edge)) continue;
         const Eigen::Matrix6d information = o3d_registration::GetInformationMatrixFromPointClouds(
             *cloud(edge.from), *cloud(edge.to), options.icp_distance, edge.transform.matrix());
         graph.edges_.emplace_back(node_of[edge.from], node_of[edge.to], edge.transform.matrix(), information,
@@ -288,7 +287,7 @@ MapBaselineSummary run_map_baseline(const std::string& method, const std::string
         for (const auto& edge : graph.edges_)
           if (edge.uncertain_ && edge.confidence_ >= options.edge_prune_threshold) kept.insert({edge.source_node_id_, edge.target_node_id_});
         for (std::size_t e = first_edge; e < edges.size(); ++e)
-          if (edges[e].kind == "loop") {
+          if (edges[e].kind == "loop" && edges[e].status == "candidate") {
             edges[e].used = kept.count({node_of[edges[e].from], node_of[edges[e].to]}) > 0;
             edges[e].status = edges[e].used ? "ok" : "rejected";
           }

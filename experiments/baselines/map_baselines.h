@@ -8,6 +8,8 @@
 //   multiway   Open3D's multiway registration: ICP edges between every pair of scans within `radius`
 //              (more than min_age apart), all as uncertain edges, optimised with Open3D's global
 //              optimisation whose line process prunes the edges it does not trust.
+// All three keep the given odometry as the odometry edges, so they differ only in their loop edges;
+// a loop ICP that finds no correspondence near the odometry's guess is `failed` and left out.
 // None of them can join sessions: ICP needs an initial guess and sessions share no frame, so each
 // session keeps its own frame (report.json lists it under sessions_not_joined).
 #pragma once
@@ -44,7 +46,7 @@ struct MapBaselineOptions {
   double icp_distance = 1.5;     ///< ICP maximum correspondence distance, m
   int icp_iterations = 50;       ///< ICP iterations
   double min_fitness = 0.5;      ///< icp-loops gate: least fraction of source points with a correspondence
-  double max_rmse = 0.4;         ///< icp-loops gate: largest RMSE of those correspondences, m
+  double max_rmse = 0.55;        ///< icp-loops gate: largest RMSE of those correspondences, m (LIO-SAM's fitness-score gate, 0.3 m^2, as an RMSE)
   double edge_prune_threshold = 0.25;  ///< multiway: line-process weight below which an edge is pruned (Open3D's default)
   int threads = 2;               ///< OpenMP threads of Open3D
 };

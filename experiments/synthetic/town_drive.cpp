@@ -26,7 +26,11 @@ constexpr double kIntersectionHalfWidth = 14.0;   // > the widest street (facade
 constexpr double kPitch = 2.0 * (kStreetHalfLength + kIntersectionHalfWidth);  // metres between intersections
 constexpr int kNodesPerSide = 3;                  // 3 x 3 intersections, 2 x 2 blocks, 12 streets
 constexpr double kTurnRadius = 8.0;               // centreline radius of a turn at an intersection, m
-constexpr double kLaneOffset = 2.0;               // lane centre right of the street's centreline, m (roads are >= 7.6 m wide)
+// Lane centre right of the street's centreline, m: parked cars reach 1.7 m from it on the narrowest
+// road (road half width 3.8 m, car centre 1.15 m inside the kerb, 0.95 m half width), so a sensor at
+// 1 +- 0.3 m stays at least 0.4 m clear of them.
+constexpr double kLaneOffset = 1.0;
+constexpr double kLaneWander = 0.3;               // most the driver wanders from the lane centre, m
 constexpr double kPathStep = 0.05;                // resolution of the dense path, m
 constexpr double kClosingWallHeight = 16.0;       // walls closing the grid's outer ends, m
 constexpr double kCornerWallHeight = 12.0;        // walls closing a building row at an intersection, m
@@ -219,8 +223,8 @@ TownDrivePlan plan_town_drive(const TownDriveOptions& options) {
       }
       if (travelled + 1e-9 < next_scan) continue;
       next_scan += options.scan_spacing;
-      // A driver wanders in the lane (first-order autoregressive, within +-0.5 m) and the body yaws, pitches and rolls a little.
-      lateral = std::clamp(0.7 * lateral + route_random.normal(0.0, 0.15), -0.5, 0.5);
+      // A driver wanders in the lane (first-order autoregressive) and the body yaws, pitches and rolls a little.
+      lateral = std::clamp(0.7 * lateral + route_random.normal(0.0, 0.1), -kLaneWander, kLaneWander);
       const double yaw = sample.heading + radians(route_random.normal(0.0, 1.5));
       const double pitch = radians(route_random.normal(0.0, 0.3)), roll = radians(route_random.normal(0.0, 0.3));
       const Eigen::Vector2d right(std::sin(sample.heading), -std::cos(sample.heading));
