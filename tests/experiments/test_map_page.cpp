@@ -54,6 +54,13 @@ std::string pose_row(const Eigen::Isometry3d& pose, char separator) {
   return text.str();
 }
 
+// A CSV field in double quotes, inner quotes doubled (RFC 4180).
+std::string csv_quoted(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
 Eigen::Isometry3d planar(double x, double y, double yaw) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -91,7 +98,7 @@ MapFolder write_map_folder(const fs::path& root) {
       step.linear() = step.linear() * Eigen::AngleAxisd(0.0087, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       folder.odometry[s].push_back(folder.odometry[s].back() * step);
       const Eigen::Isometry3d from_k_to_next = step.inverse();  // p_next = T p_k
-      const std::string session = s == 0 ? sessions[0] : "\"" + sessions[1] + "\"";
+      const std::string session = s == 0 ? sessions[0] : csv_quoted(sessions[1]);
       edges << session << ",scans/s" << s << "_" << k << ".ply," << session << ",scans/s" << s << "_" << k + 1
             << ".ply,odometry,ok,1," << pose_row(from_k_to_next, ',') << ",0\n";
     }
@@ -100,7 +107,7 @@ MapFolder write_map_folder(const fs::path& root) {
   for (int k = 0; k < 4; ++k)
     edges << "1,scans/s0_" << 30 + k << ".ply,1,scans/s0_" << k << ".ply,loop," << statuses[k] << "," << (k < 2 ? 1 : 0) << ","
           << pose_row(Eigen::Isometry3d::Identity(), ',') << ",0\n";
-  edges << "1,scans/s0_5.ply,\"" << kHostileSession << "\",scans/s1_5.ply,loop,\"" << kHostileStatus << "\",0,"
+  edges << "1,scans/s0_5.ply," << csv_quoted(kHostileSession) << ",scans/s1_5.ply,loop," << csv_quoted(kHostileStatus) << ",0,"
         << pose_row(Eigen::Isometry3d::Identity(), ',') << ",0\n";
   std::ofstream(root / "report.json") << R"({"counts": {"scans": 80, "sessions": 2}, "evaluation": {"ate_m": 0.1234},
     "note": "</script><script>document.body.setAttribute('data-pwned','3')</script>"})";
