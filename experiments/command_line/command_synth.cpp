@@ -1,10 +1,12 @@
 // `quadrix synth SCENE --seed N --sensor hdl64|vlp16|livox|tls [--poses POSE_SPEC] --out DIR`:
 // simulates scans of a built-in scene and writes a self-describing folder with the ground truth;
 // `quadrix synth --list` names the scenes and sensors. `quadrix synth loop-closures` writes a
-// loop-closure benchmark set (loop_closure_set.h) instead of one scene's scans.
+// loop-closure benchmark set (loop_closure_set.h) instead of one scene's scans, and `quadrix synth drive`
+// a multi-session drive through a town with drifting odometry (town_drive.h), the mapping benchmark.
 #include "experiments/command_line/command_registry.h"
 #include "experiments/synthetic/loop_closure_set.h"
 #include "experiments/synthetic/synthetic_output.h"
+#include "experiments/synthetic/town_drive.h"
 #include "geometry/error.h"
 
 #include <chrono>
@@ -12,6 +14,7 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 
 namespace quadrix::cli {
@@ -31,7 +34,11 @@ struct SynthCommandOptions {
   std::string second_pass = "opposite";  ///< loop-closures: the second drive's direction, opposite or same
   std::string source_sensor;           ///< loop-closures: the second pass's sensor (the sources'), for a cross-sensor set
   bool list = false;                   ///< list scenes and sensors, then exit
-  LoopClosureSetOptions loop_set;      ///< loop-closures only: streets, pairs per bin, scan spacing
+  LoopClosureSetOptions loop_set;      ///< loop-closures only: streets, pairs per bin
+  std::optional<double> scan_spacing;  ///< loop-closures, drive: metres between scans (defaults 3 and 2)
+  std::string sessions = "hdl64,vlp16,livox";  ///< drive only: one session per sensor, comma-separated
+  TownDriveOptions drive;              ///< drive only: length, scans, drift
+  std::optional<int> drive_scans;      ///< drive only: scans per session instead of --length
 };
 
 void print_listing() {
@@ -42,6 +49,9 @@ void print_listing() {
               "pass the other way unless --second-pass same, with other parked cars and pedestrians), --pairs-per-bin "
               "pairs per street in each "
               "of the bins 0-10, 10-20, 20-30 m; writes pairs.tsv for quadrix bench");
+  std::printf("  %-9s %s\n", "drive",
+              "mapping benchmark, not a scene: a town of 2 x 2 blocks (12 streets) driven by --sessions (one sensor "
+              "each) for --length m, with drifting odometry; writes SCANS.tsv, truth.tsv, scans/ and README.md");
   std::printf("sensors:\n");
   for (const auto& name : sensor_names()) {
     const SensorModel sensor = sensor_preset(name);
@@ -63,6 +73,35 @@ SensorModel sensor_with_overrides(const std::string& name, const SynthCommandOpt
   return sensor;
 }
 
+// `quadrix synth drive`: the town drive with one session per --sessions sensor.
+void run_drive(const SynthCommandOptions& options) {
+  if (!options.poses.empty()) throw Error("synth drive: --poses does not apply (the sessions follow the town's tour)");
+  if (options.format != "ply" || options.ascii) throw Error("synth drive: writes binary PLY only (no --format pcd, no --ascii)");
+  if (options.second_pass != "opposite" || !options.source_sensor.empty())
+    throw Error("synth drive: --second-pass and --source-sensor apply to loop-closures only");
+  TownDriveOptions drive = options.drive;
+  drive.seed = options.seed;
+  drive.foliage = foliage_from_name(options.foliage, "--foliage");
+  if (options.scan_spacing) drive.scan_spacing = *options.scan_spacing;
+  drive.scans = options.drive_scans;
+  drive.sensors.clear();
+  std::stringstream names(options.sessions);
+  for (std::string name; std::getline(names, name, ',');) {
+    if (name.empty()) throw Error("--sessions: expected sensor names separated by commas, got '" + options.sessions + "'");
+    drive.sensors.push_back(sensor_with_overrides(name, options));
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const TownDriveSummary summary = write_town_drive(options.out, drive);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("town drive, seed %llu: %zu scans in %zu session(s), %zu points\n", static_cast<unsigned long long>(drive.seed),
+              summary.plan.scans.size(), drive.sensors.size(), summary.points);
+  for (std::size_t k = 0; k < drive.sensors.size(); ++k)
+    std::printf("  session %zu (%s): %.0f m, odometry ATE %.2f m, end error %.2f m\n", k + 1, drive.sensors[k].name.c_str(),
+                summary.plan.session_lengths[k], summary.odometry_ate[k], summary.odometry_end_error[k]);
+  std::printf("revisits within 10 m: %d same direction, %d opposite; wrote %s/SCANS.tsv and truth.tsv in %.1f s\n",
+              summary.same_direction_revisits, summary.opposite_direction_revisits, options.out.c_str(), seconds);
+}
+
 void run_command(const SynthCommandOptions& options) {
   if (options.list) {
     print_listing();
@@ -71,11 +110,16 @@ void run_command(const SynthCommandOptions& options) {
   if (options.scene.empty()) throw Error("synth: SCENE is required (one of street, corridor, monument; see --list)");
   if (options.out.empty()) throw Error("synth: --out DIR is required");
   const SensorModel sensor = sensor_with_overrides(options.sensor, options);
+  if (options.scene == "drive") {
+    run_drive(options);
+    return;
+  }
   if (options.scene == "loop-closures") {
     // The set places its own scans and writes binary PLY: options that would be ignored are refused.
     if (!options.poses.empty()) throw Error("synth loop-closures: --poses does not apply (each pass places its own scans)");
     if (options.format != "ply" || options.ascii) throw Error("synth loop-closures: writes binary PLY only (no --format pcd, no --ascii)");
     LoopClosureSetOptions loop_set = options.loop_set;
+    if (options.scan_spacing) loop_set.scan_spacing = *options.scan_spacing;
     loop_set.first_seed = options.seed;
     loop_set.street.foliage = foliage_from_name(options.foliage, "--foliage");
     if (options.second_pass != "opposite" && options.second_pass != "same")
@@ -95,6 +139,7 @@ void run_command(const SynthCommandOptions& options) {
     return;
   }
   if (options.second_pass != "opposite") throw Error("--second-pass applies to loop-closures only");
+  if (options.scan_spacing) throw Error("--scan-spacing applies to loop-closures and drive only");
   if (!options.source_sensor.empty()) throw Error("--source-sensor applies to loop-closures only");
   SyntheticOutputOptions output;
   if (options.format == "ply") {
@@ -134,7 +179,7 @@ const CommandRegistration registration(20, [](CLI::App& app) {
   auto options = std::make_shared<SynthCommandOptions>();
   CLI::App* command =
       app.add_subcommand("synth", "Simulate LiDAR/TLS scans of a built-in scene and write clouds plus ground truth");
-  command->add_option("scene", options->scene, "Scene: street, corridor or monument, or loop-closures (see --list)");
+  command->add_option("scene", options->scene, "Scene: street, corridor or monument, or loop-closures or drive (see --list)");
   command->add_flag("--list", options->list, "List the scenes and sensors, then exit");
   command->add_option("--seed", options->seed, "Seed of the layout (street, corridor) and of noise/dropout")
       ->capture_default_str();
@@ -153,7 +198,26 @@ const CommandRegistration registration(20, [](CLI::App& app) {
   command->add_option("--streets", options->loop_set.streets, "loop-closures: number of street layouts")->capture_default_str();
   command->add_option("--pairs-per-bin", options->loop_set.pairs_per_bin, "loop-closures: pairs per street and distance bin")
       ->capture_default_str();
-  command->add_option("--scan-spacing", options->loop_set.scan_spacing, "loop-closures: metres between scans of a pass")
+  command->add_option("--scan-spacing", options->scan_spacing,
+                      "loop-closures, drive: metres between scans of a pass or session (default 3 and 2)");
+  command->add_option("--sessions", options->sessions, "drive: one session per sensor, comma-separated (hdl64, vlp16, livox, tls)")
+      ->capture_default_str();
+  command->add_option("--length", options->drive.length, "drive: metres driven per session")->capture_default_str();
+  command->add_option("--scans", options->drive_scans, "drive: scans per session (instead of --length)");
+  command->add_option("--drift-scale", options->drive.drift.scale_error,
+                      "drive: odometry scale error, fraction (sign drawn per session)")
+      ->capture_default_str();
+  command->add_option("--drift-yaw-bias", options->drive.drift.yaw_bias_deg_per_m,
+                      "drive: odometry heading bias, degrees per metre (sign drawn per session)")
+      ->capture_default_str();
+  command->add_option("--drift-yaw-walk", options->drive.drift.yaw_walk_deg_per_sqrt_m,
+                      "drive: odometry heading random walk, degrees per sqrt(metre)")
+      ->capture_default_str();
+  command->add_option("--drift-tilt-walk", options->drive.drift.tilt_walk_deg_per_sqrt_m,
+                      "drive: odometry roll and pitch random walk, degrees per sqrt(metre)")
+      ->capture_default_str();
+  command->add_option("--drift-translation-walk", options->drive.drift.translation_walk_m_per_sqrt_m,
+                      "drive: odometry position random walk, metres per sqrt(metre)")
       ->capture_default_str();
   command->add_option("--second-pass", options->second_pass,
                       "loop-closures: the second drive goes the opposite way or the same way (forward-looking sensors such as "

@@ -1,10 +1,11 @@
 // `quadrix view INPUT --out page.html [--points N]`: the interactive 3-D page (DESIGN.md §7) of a
 // `quadrix register --out` folder (registration page), a `quadrix model` JSON file or a
-// `quadrix synth` folder (model pages). One self-contained HTML file: three.js from Debian's
+// `quadrix synth` folder (model pages), or the map page of a `quadrix map --out` folder (map_page.h). One self-contained HTML file: three.js from Debian's
 // libjs-three and the data are inlined, so it opens from disk without a network.
 #include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/reports/interactive_page.h"
+#include "experiments/reports/map_page.h"
 #include "geometry/error.h"
 
 #include <nlohmann/json.hpp>
@@ -27,7 +28,10 @@ struct ViewCommandOptions {
 std::string page_of(const ViewCommandOptions& options, std::string& kind) {
   const std::filesystem::path input(options.input);
   std::string html;
-  if (std::filesystem::is_directory(input) && std::filesystem::exists(input / "report.json")) {
+  if (is_map_folder(options.input)) {  // before the registration branch: a map folder has a report.json too
+    html = map_page_html(read_map_folder(options.input, options.point_budget));
+    kind = "map";
+  } else if (std::filesystem::is_directory(input) && std::filesystem::exists(input / "report.json")) {
     RegistrationPageInput page = read_registration_folder(options.input);
     page.point_budget = options.point_budget;
     html = registration_page_html(page);
@@ -44,8 +48,8 @@ std::string page_of(const ViewCommandOptions& options, std::string& kind) {
     kind = "model";
   } else {
     throw file_error(options.input,
-                     "expected a `quadrix register --out` folder (report.json), a `quadrix synth` folder (scene.json) "
-                     "or a `quadrix model` JSON file");
+                     "expected a `quadrix register --out` folder (report.json), a `quadrix synth` folder (scene.json), "
+                     "a map folder (poses.tsv and edges.csv) or a `quadrix model` JSON file");
   }
   return html;
 }
@@ -75,7 +79,7 @@ const CommandRegistration registration(65, [](CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "view", "Write an interactive 3-D page (one self-contained HTML file) of a registration, a model or a synthetic scene");
   command->add_option("input", options->input,
-                      "A `quadrix register --out` folder, a `quadrix model` JSON file or a `quadrix synth` folder")
+                      "A `quadrix register --out` folder, a `quadrix model` JSON file, a `quadrix synth` folder or a map folder")
       ->required();
   command->add_option("--out", options->out, "HTML page to write")->required();
   command->add_option("--points", options->point_budget, "Most points written into the page (subsampled evenly)")

@@ -477,7 +477,8 @@ Scene make_street_scene(std::uint64_t seed, const StreetOptions& options) {
   PortableRandom random(seed);
 
   const double half_length = 72.0;  // x in [-72, 72], closed by cross facades
-  const double gradient = (random.bernoulli(0.5) ? 1.0 : -1.0) * random.uniform(0.005, 0.03);
+  const double drawn_gradient = (random.bernoulli(0.5) ? 1.0 : -1.0) * random.uniform(0.005, 0.03);
+  const double gradient = options.level ? 0.0 : drawn_gradient;
   const double road_half_width = random.uniform(3.8, 5.0);
   const double sidewalk_width = random.uniform(2.5, 4.0);
   const double kerb_height = random.uniform(0.12, 0.18);

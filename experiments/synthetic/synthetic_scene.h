@@ -105,6 +105,9 @@ Foliage foliage_from_name(const std::string& name, const std::string& context);
 /// Options of the street scene beyond its seed.
 struct StreetOptions {
   Foliage foliage = Foliage::Solid;  ///< solid crowns, or porous crowns plus hedges
+  /// A level road (gradient 0) so streets join at intersections of one height (the town drive);
+  /// the gradient is still drawn, so the rest of the layout equals the sloped street's.
+  bool level = false;
 };
 /// Builds a scene by name ("street", "corridor", "monument"); `street` applies to the street only.
 /// Throws quadrix::Error for unknown names and for porous foliage asked of another scene.
