@@ -100,7 +100,7 @@ class CloudCache {
 struct ScanModel {
   SceneModel model;                 ///< as model_scene built it
   std::optional<SceneModel> augmented;  ///< the same with augmented points, when model_scene gave none (augment_other_side's copy, made once)
-  ExtractionOptions extraction;     ///< the extraction it was modelled with
+  RegistrationOptions options;      ///< its preset's options (auto: resolved on this scan); source_extraction is what it was modelled with
   Eigen::VectorXd descriptor;       ///< ring_descriptor
   std::string preset;               ///< preset name or the auto choice's reasons
   double modelling_ms = 0.0;        ///< model_scene time
@@ -162,9 +162,9 @@ std::vector<ScanModel> model_scans(const ScanList& list, const MapOptions& optio
         resolved = resolve_registration_side(options.preset, cloud, "scan", &notes);
         scan.preset = notes.empty() ? options.preset : notes;
       }
-      scan.extraction = resolved.source_extraction;
+      scan.options = resolved;
       const Clock::time_point start = Clock::now();
-      ModellingResult modelling = model_scene(cloud, scan.extraction, resolved.modelling);
+      ModellingResult modelling = model_scene(cloud, resolved.source_extraction, resolved.modelling);
       if (modelling.model.augmented_count() == 0 && resolved.correspondences.match_augmented_points) {
         ModellingResult augmented = modelling;
         augment_scene_model(cloud.positions.cast<double>(), augmented, resolved.modelling);
@@ -172,7 +172,7 @@ std::vector<ScanModel> model_scans(const ScanList& list, const MapOptions& optio
       }
       scan.modelling_ms = elapsed_ms(start);
       scan.model = std::move(modelling.model);
-      scan.descriptor = ring_descriptor(cloud, scan.extraction.up);
+      scan.descriptor = ring_descriptor(cloud, resolved.source_extraction.up);
     } catch (const Error& error) {
       std::lock_guard<std::mutex> lock(mutex);
       if (index < first_error_scan) {
@@ -193,10 +193,9 @@ std::vector<ScanModel> model_scans(const ScanList& list, const MapOptions& optio
 MapEdge register_pair(std::size_t from, std::size_t to, MapEdgeKind kind, const std::vector<ScanModel>& models,
                       CloudCache& clouds, const MapOptions& options) {
   const Clock::time_point start = Clock::now();
-  RegistrationOptions registration =
-      options.registration_options ? *options.registration_options : registration_preset(options.preset == "auto" ? "vlp64" : options.preset);
-  registration.source_extraction = models[from].extraction;
-  registration.target_extraction = models[to].extraction;
+  // The source's options with the target's extraction, as `quadrix register` resolves a pair.
+  RegistrationOptions registration = models[from].options;
+  registration.target_extraction = models[to].options.source_extraction;
   const SceneModel* source = &models[from].model;
   const SceneModel* target = &models[to].model;
   if (registration.correspondences.match_augmented_points) {

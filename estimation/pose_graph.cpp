@@ -74,7 +74,9 @@ class DcsLoss final : public ceres::LossFunction {
   double phi_;
 };
 
-double dcs_rho(double chi2, double phi) { return chi2 <= phi ? chi2 : phi * (3.0 * chi2 - phi) / (chi2 + phi); }
+double huber_rho(double chi2, double threshold) {
+  return chi2 <= threshold * threshold ? chi2 : 2.0 * threshold * std::sqrt(chi2) - threshold * threshold;
+}
 
 Eigen::Matrix<double, 6, 6> root_of(const Information6d& information, std::size_t edge) {
   if (!information.allFinite()) throw Error("pose graph: edge " + std::to_string(edge) + " has a non-finite information matrix");
@@ -128,6 +130,7 @@ std::vector<std::size_t> pose_graph_components(std::size_t pose_count, const std
 PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
                                      const PoseGraphOptions& options) {
   if (!(options.dcs_phi > 0.0)) throw Error("pose graph: dcs_phi must be positive");
+  if (!(options.huber_threshold > 0.0)) throw Error("pose graph: huber_threshold must be positive");
   PoseGraphSummary summary;
   std::vector<Eigen::Matrix<double, 6, 6>> roots;
   roots.reserve(edges.size());
@@ -151,7 +154,7 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
     chi2.resize(edges.size());
     for (std::size_t index = 0; index < edges.size(); ++index) {
       chi2[index] = edge_chi2(poses, edges[index]);
-      cost += 0.5 * (edges[index].robust ? dcs_rho(chi2[index], options.dcs_phi) : chi2[index]);
+      cost += 0.5 * (edges[index].robust ? huber_rho(chi2[index], options.huber_threshold) : chi2[index]);
     }
     return cost;
   };
@@ -163,7 +166,9 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
     Eigen::Map<Eigen::Vector3d>(translations[index].data()) = poses[index].translation();
     Eigen::Map<Eigen::Quaterniond>(rotations[index].data()) = Eigen::Quaterniond(poses[index].rotation()).normalized();
   }
-  if (!edges.empty()) {
+  const bool any_robust = std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& edge) { return edge.robust; });
+  const int stages = options.dcs_stage && any_robust ? 2 : 1;
+  for (int stage = 0; stage < stages && !edges.empty(); ++stage) {
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
     problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -173,8 +178,11 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
       const PoseGraphEdge& edge = edges[index];
       auto* cost = new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(new RelativePoseCost{
           edge.measurement.translation(), Eigen::Quaterniond(edge.measurement.rotation()).normalized(), roots[index]});
-      problem.AddResidualBlock(cost, edge.robust ? new DcsLoss(options.dcs_phi) : nullptr, translations[edge.from].data(),
-                               rotations[edge.from].data(), translations[edge.to].data(), rotations[edge.to].data());
+      ceres::LossFunction* loss = nullptr;
+      if (edge.robust) loss = stage == 0 ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.huber_threshold))
+                                         : new DcsLoss(options.dcs_phi);
+      problem.AddResidualBlock(cost, loss, translations[edge.from].data(), rotations[edge.from].data(), translations[edge.to].data(),
+                               rotations[edge.to].data());
     }
     for (std::size_t index = 0; index < poses.size(); ++index) {
       if (!problem.HasParameterBlock(rotations[index].data())) continue;
@@ -191,20 +199,20 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
     solver_options.num_threads = 1;
     ceres::Solver::Summary solved;
     ceres::Solve(solver_options, &problem, &solved);
-    summary.iterations = static_cast<int>(solved.iterations.size());
+    summary.iterations += static_cast<int>(solved.iterations.size());
     summary.converged = solved.termination_type == ceres::CONVERGENCE;
-    summary.report = solved.BriefReport();
-    for (std::size_t index = 0; index < poses.size(); ++index) {
-      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-      pose.linear() = Eigen::Map<const Eigen::Quaterniond>(rotations[index].data()).normalized().toRotationMatrix();
-      pose.translation() = Eigen::Map<const Eigen::Vector3d>(translations[index].data());
-      poses[index] = pose;
-    }
+    summary.report += (summary.report.empty() ? "" : " | ") + solved.BriefReport();
+  }
+  for (std::size_t index = 0; index < poses.size(); ++index) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = Eigen::Map<const Eigen::Quaterniond>(rotations[index].data()).normalized().toRotationMatrix();
+    pose.translation() = Eigen::Map<const Eigen::Vector3d>(translations[index].data());
+    poses[index] = pose;
   }
   summary.final_cost = total_cost(summary.final_chi2);
   summary.final_scale.resize(edges.size());
   for (std::size_t index = 0; index < edges.size(); ++index)
-    summary.final_scale[index] = edges[index].robust ? dcs_scale(summary.final_chi2[index], options.dcs_phi) : 1.0;
+    summary.final_scale[index] = edges[index].robust && options.dcs_stage ? dcs_scale(summary.final_chi2[index], options.dcs_phi) : 1.0;
   return summary;
 }
 

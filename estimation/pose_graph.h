@@ -1,8 +1,12 @@
 // A pose graph over SE(3) (paper §"Real-World Applications": the registration becomes a pose-graph
 // constraint and the graph is optimised): one pose per scan, relative-pose edges with a 6x6
-// information matrix, odometry edges plain and loop edges under the dynamic-covariance-scaling
-// kernel (DCS, Agarwal et al. 2013, the kernel the paper's selection step uses), one fixed gauge
-// pose per connected component. Solved with Ceres (Levenberg-Marquardt, quaternion manifold).
+// information matrix, one fixed gauge pose per connected component. Solved with Ceres
+// (Levenberg-Marquardt, quaternion manifold) in two stages: first with odometry edges plain and
+// loop edges under the convex Huber kernel, which pulls a drifted trajectory onto its loops however
+// far it drifted; then from there with loop edges under dynamic covariance scaling (DCS, Agarwal
+// et al. 2013, the kernel of the paper's selection step), which scales down a loop edge that
+// disagrees with the rest. DCS alone from drifted odometry scales every loop edge down (its χ² is
+// thousands there) and leaves the drift in place.
 #pragma once
 
 #include <Eigen/Core>
@@ -24,20 +28,22 @@ struct PoseGraphEdge {
   std::size_t to = 0;                                            ///< index of the target pose
   Eigen::Isometry3d measurement = Eigen::Isometry3d::Identity(); ///< T_to^-1 T_from as measured
   Information6d information = Information6d::Identity();        ///< inverse covariance of the error, rotation then translation, `to` frame
-  bool robust = false;                                           ///< under the DCS kernel (loop edges) rather than plain least squares
+  bool robust = false;                                           ///< a loop edge: Huber, then DCS (else plain least squares)
 };
 
 /// Options of optimise_pose_graph.
 struct PoseGraphOptions {
   double dcs_phi = 0.5;             ///< Φ of DCS: a robust edge with squared error χ² is scaled by s = min(1, 2Φ/(Φ+χ²)) (paper's selection kernel, Φ = 0.5)
+  double huber_threshold = 2.0;     ///< the first stage's Huber kernel on robust edges is quadratic up to χ² = this², linear in the error beyond
+  bool dcs_stage = true;            ///< run the second stage (DCS on robust edges); false: Huber only
   int maximum_iterations = 100;     ///< Levenberg-Marquardt iterations
   double function_tolerance = 1e-10;///< relative cost change at which Ceres stops
 };
 
 /// What optimise_pose_graph did.
 struct PoseGraphSummary {
-  double initial_cost = 0.0;            ///< total cost 1/2 Σ ρ(χ²) at the initial poses
-  double final_cost = 0.0;              ///< total cost at the optimised poses
+  double initial_cost = 0.0;            ///< the first stage's cost 1/2 Σ ρ(χ²) (Huber on robust edges) at the initial poses
+  double final_cost = 0.0;              ///< the same cost at the optimised poses
   std::vector<double> initial_chi2;     ///< χ² of each edge (in edge order) before optimisation
   std::vector<double> final_chi2;       ///< χ² of each edge after optimisation
   std::vector<double> final_scale;      ///< DCS scale s of each edge after (1 for non-robust edges)
@@ -61,8 +67,9 @@ double dcs_scale(double chi2, double phi);
 std::vector<std::size_t> pose_graph_components(std::size_t pose_count, const std::vector<PoseGraphEdge>& edges);
 
 /// Optimises `poses` (sensor -> map) in place: minimise 1/2 Σ ρ_e(e_eᵀ Ω_e e_e) over every pose but the
-/// first of each connected component, which stays where it is (the gauge), with ρ the DCS kernel
-/// for robust edges and the identity otherwise. Throws quadrix::Error for an edge naming a pose
+/// first of each connected component, which stays where it is (the gauge), with ρ the identity for
+/// plain edges and, for robust edges, Huber in the first stage and DCS in the second (file comment).
+/// Costs (with the first stage's convex kernel) and χ² are reported at the start and at the end. Throws quadrix::Error for an edge naming a pose
 /// that does not exist or an information matrix that is not symmetric positive semi-definite.
 PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
                                      const PoseGraphOptions& options = {});
