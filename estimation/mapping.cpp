@@ -458,7 +458,8 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
   for (std::size_t index = 0; index < result.edges.size(); ++index) {
     const MapEdge& edge = result.edges[index];
     if (!edge.used) continue;
-    graph_edges.push_back({edge.from, edge.to, edge.transform, edge.information, edge.kind == MapEdgeKind::Loop});
+    const bool loop = edge.kind == MapEdgeKind::Loop;
+    graph_edges.push_back({edge.from, edge.to, edge.transform, edge.information, loop && edge.status == "ok", loop && edge.status != "ok"});
     graph_edge_of.push_back(index);
   }
   result.poses = result.initial;

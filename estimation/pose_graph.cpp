@@ -1,8 +1,9 @@
 // Pose graph in Ceres: translation (R^3) and quaternion (ceres::EigenQuaternionManifold, Ceres 2.1)
 // blocks per pose, an autodiff relative-pose cost per edge weighted by the square root of its
-// information, and DCS as a ceres::LossFunction on robust edges.
+// information, and the robust kernels of quadric_distance.h as ceres::LossFunctions.
 #include "estimation/pose_graph.h"
 
+#include "estimation/quadric_distance.h"
 #include "geometry/error.h"
 
 #include <ceres/ceres.h>
@@ -52,31 +53,22 @@ struct RelativePoseCost {
   }
 };
 
-/// DCS as an M-estimator of s = χ²: ρ(s) = s for s <= Φ, Φ(3s - Φ)/(s + Φ) beyond, whose derivative
-/// 4Φ²/(s + Φ)² is the square of the DCS scale 2Φ/(Φ + s) (Agarwal et al. 2013).
-class DcsLoss final : public ceres::LossFunction {
+/// A robust kernel of quadric_distance.h (evaluate_robust_loss, shared with the refiners) as a Ceres
+/// loss on s = χ²: DCS (Agarwal et al. 2013) or Huber.
+class KernelLoss final : public ceres::LossFunction {
  public:
-  explicit DcsLoss(double phi) : phi_(phi) {}
+  KernelLoss(RobustLoss kernel, double scale) : kernel_(kernel), scale_(scale) {}
   void Evaluate(double s, double rho[3]) const override {
-    if (s <= phi_) {
-      rho[0] = s;
-      rho[1] = 1.0;
-      rho[2] = 0.0;
-      return;
-    }
-    const double sum = s + phi_;
-    rho[0] = phi_ * (3.0 * s - phi_) / sum;
-    rho[1] = 4.0 * phi_ * phi_ / (sum * sum);
-    rho[2] = -8.0 * phi_ * phi_ / (sum * sum * sum);
+    const LossValue value = evaluate_robust_loss(kernel_, scale_, s);
+    rho[0] = value.rho;
+    rho[1] = value.derivative;
+    rho[2] = value.second;
   }
 
  private:
-  double phi_;
+  RobustLoss kernel_;
+  double scale_;
 };
-
-double huber_rho(double chi2, double threshold) {
-  return chi2 <= threshold * threshold ? chi2 : 2.0 * threshold * std::sqrt(chi2) - threshold * threshold;
-}
 
 Eigen::Matrix<double, 6, 6> root_of(const Information6d& information, std::size_t edge) {
   if (!information.allFinite()) throw Error("pose graph: edge " + std::to_string(edge) + " has a non-finite information matrix");
@@ -154,7 +146,10 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
     chi2.resize(edges.size());
     for (std::size_t index = 0; index < edges.size(); ++index) {
       chi2[index] = edge_chi2(poses, edges[index]);
-      cost += 0.5 * (edges[index].robust ? huber_rho(chi2[index], options.huber_threshold) : chi2[index]);
+      const double value = chi2[index];
+      cost += 0.5 * (edges[index].switchable ? evaluate_robust_loss(RobustLoss::Dcs, options.dcs_phi, value).rho
+                     : edges[index].robust   ? evaluate_robust_loss(RobustLoss::Huber, options.huber_threshold, value).rho
+                                             : value);
     }
     return cost;
   };
@@ -166,8 +161,8 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
     Eigen::Map<Eigen::Vector3d>(translations[index].data()) = poses[index].translation();
     Eigen::Map<Eigen::Quaterniond>(rotations[index].data()) = Eigen::Quaterniond(poses[index].rotation()).normalized();
   }
-  const bool any_robust = std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& edge) { return edge.robust; });
-  const int stages = options.dcs_stage && any_robust ? 2 : 1;
+  const bool any_switchable = std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& edge) { return edge.switchable; });
+  const int stages = any_switchable ? 2 : 1;
   for (int stage = 0; stage < stages && !edges.empty(); ++stage) {
     ceres::Problem::Options problem_options;
     problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -176,11 +171,12 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
     ceres::EigenQuaternionManifold quaternion_manifold;
     for (std::size_t index = 0; index < edges.size(); ++index) {
       const PoseGraphEdge& edge = edges[index];
+      if (edge.switchable && stage == 0) continue;
       auto* cost = new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(new RelativePoseCost{
           edge.measurement.translation(), Eigen::Quaterniond(edge.measurement.rotation()).normalized(), roots[index]});
       ceres::LossFunction* loss = nullptr;
-      if (edge.robust) loss = stage == 0 ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.huber_threshold))
-                                         : new DcsLoss(options.dcs_phi);
+      if (edge.switchable) loss = new KernelLoss(RobustLoss::Dcs, options.dcs_phi);
+      else if (edge.robust) loss = new KernelLoss(RobustLoss::Huber, options.huber_threshold);
       problem.AddResidualBlock(cost, loss, translations[edge.from].data(), rotations[edge.from].data(), translations[edge.to].data(),
                                rotations[edge.to].data());
     }
@@ -212,7 +208,7 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
   summary.final_cost = total_cost(summary.final_chi2);
   summary.final_scale.resize(edges.size());
   for (std::size_t index = 0; index < edges.size(); ++index)
-    summary.final_scale[index] = edges[index].robust && options.dcs_stage ? dcs_scale(summary.final_chi2[index], options.dcs_phi) : 1.0;
+    summary.final_scale[index] = edges[index].switchable ? dcs_scale(summary.final_chi2[index], options.dcs_phi) : 1.0;
   return summary;
 }
 

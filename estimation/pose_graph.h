@@ -1,12 +1,14 @@
 // A pose graph over SE(3) (paper §"Real-World Applications": the registration becomes a pose-graph
 // constraint and the graph is optimised): one pose per scan, relative-pose edges with a 6x6
 // information matrix, one fixed gauge pose per connected component. Solved with Ceres
-// (Levenberg-Marquardt, quaternion manifold) in two stages: first with odometry edges plain and
+// (Levenberg-Marquardt, quaternion manifold) in up to two stages. First, odometry edges plain and
 // loop edges under the convex Huber kernel, which pulls a drifted trajectory onto its loops however
-// far it drifted; then from there with loop edges under dynamic covariance scaling (DCS, Agarwal
-// et al. 2013, the kernel of the paper's selection step), which scales down a loop edge that
-// disagrees with the rest. DCS alone from drifted odometry scales every loop edge down (its χ² is
-// thousands there) and leaves the drift in place.
+// far it drifted. Then, when there are switchable edges (unsure loops), from there with those under
+// dynamic covariance scaling (DCS, Agarwal et al. 2013, the kernel of the paper's selection step),
+// which scales down an edge that disagrees with the corrected graph. DCS from drifted odometry
+// would scale every loop edge down (χ² is thousands there); on sure loop edges it also scales right
+// ones down once calibrated residuals reach a few units of χ², which cost accuracy on the BALM walk
+// (docs/mapping.md), so sure loop edges stay under Huber throughout.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,14 +30,14 @@ struct PoseGraphEdge {
   std::size_t to = 0;                                            ///< index of the target pose
   Eigen::Isometry3d measurement = Eigen::Isometry3d::Identity(); ///< T_to^-1 T_from as measured
   Information6d information = Information6d::Identity();        ///< inverse covariance of the error, rotation then translation, `to` frame
-  bool robust = false;                                           ///< a loop edge: Huber, then DCS (else plain least squares)
+  bool robust = false;                                           ///< a sure loop edge: under Huber (else plain least squares)
+  bool switchable = false;                                       ///< an unsure loop edge: left out of the first stage, under DCS in the second
 };
 
 /// Options of optimise_pose_graph.
 struct PoseGraphOptions {
   double dcs_phi = 0.5;             ///< Φ of DCS: a robust edge with squared error χ² is scaled by s = min(1, 2Φ/(Φ+χ²)) (paper's selection kernel, Φ = 0.5)
-  double huber_threshold = 2.0;     ///< the first stage's Huber kernel on robust edges is quadratic up to χ² = this², linear in the error beyond
-  bool dcs_stage = true;            ///< run the second stage (DCS on robust edges); false: Huber only
+  double huber_threshold = 2.0;     ///< the Huber kernel on robust edges is quadratic up to χ² = this², linear in the error beyond
   int maximum_iterations = 100;     ///< Levenberg-Marquardt iterations
   double function_tolerance = 1e-10;///< relative cost change at which Ceres stops
 };
@@ -46,7 +48,7 @@ struct PoseGraphSummary {
   double final_cost = 0.0;              ///< the same cost at the optimised poses
   std::vector<double> initial_chi2;     ///< χ² of each edge (in edge order) before optimisation
   std::vector<double> final_chi2;       ///< χ² of each edge after optimisation
-  std::vector<double> final_scale;      ///< DCS scale s of each edge after (1 for non-robust edges)
+  std::vector<double> final_scale;      ///< DCS scale s of each switchable edge after (1 for the others)
   std::vector<std::size_t> component;   ///< connected component of each pose (0 = the one holding pose 0)
   std::vector<std::size_t> gauges;      ///< the pose held fixed in each component
   int iterations = 0;                   ///< Ceres iterations
@@ -68,8 +70,8 @@ std::vector<std::size_t> pose_graph_components(std::size_t pose_count, const std
 
 /// Optimises `poses` (sensor -> map) in place: minimise 1/2 Σ ρ_e(e_eᵀ Ω_e e_e) over every pose but the
 /// first of each connected component, which stays where it is (the gauge), with ρ the identity for
-/// plain edges and, for robust edges, Huber in the first stage and DCS in the second (file comment).
-/// Costs (with the first stage's convex kernel) and χ² are reported at the start and at the end. Throws quadrix::Error for an edge naming a pose
+/// plain edges, Huber for robust ones and DCS for switchable ones (second stage; file comment).
+/// Costs and χ² are reported at the start and at the end. Throws quadrix::Error for an edge naming a pose
 /// that does not exist or an information matrix that is not symmetric positive semi-definite.
 PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
                                      const PoseGraphOptions& options = {});

@@ -1,4 +1,4 @@
-// `quadrix map SCANS.tsv --out DIR [--gt TRUTH.tsv] [--preset P] [--ambiguous-edges]` (or
+// `quadrix map SCANS.tsv --out DIR [--gt TRUTH.tsv] [--preset P] [--no-ambiguous-edges]` (or
 // `quadrix map --kitti VELODYNE_FOLDER [--kitti-poses FILE --kitti-calib FILE] --out DIR`): one map
 // from many scans (paper §"Real-World Applications"): every scan modelled once, odometry given or
 // registered scan to scan, loop candidates by radius search within sessions and by a place
@@ -115,7 +115,8 @@ const CommandRegistration registration(75, [](CLI::App& app) {
   command->add_option("--minimum-loop-travel", options->map.minimum_loop_travel, "A loop candidate lies at least this far back along the path, m");
   command->add_option("--candidates-per-scan", options->map.candidates_per_scan, "Loop candidates registered per scan within a session");
   command->add_option("--place-candidates", options->map.place_candidates_per_scan, "Candidates per scan across sessions (place descriptor)");
-  command->add_flag("--ambiguous-edges", options->map.use_ambiguous_edges, "Ambiguous loop edges enter the graph under DCS too");
+  command->add_flag("!--no-ambiguous-edges", options->map.use_ambiguous_edges,
+                    "Leave ambiguous loop edges out of the graph (default: in, as switchable edges under DCS)");
   command->add_option("--map-voxel", options->map.map_voxel, "map.ply keeps one point per cube of this edge, m");
   command->callback([options] { run(*options); });
 });

@@ -97,7 +97,7 @@ TEST(PoseGraph, TrueLoopEdgesUndoOdometryDriftOverRandomSeeds) {
   }
 }
 
-TEST(PoseGraph, DcsScalesDownAFalseLoopEdge) {
+TEST(PoseGraph, DcsScalesDownAFalseSwitchableEdgeAndKeepsATrueOne) {
   for (unsigned seed : {21u, 22u, 23u}) {
     std::mt19937 random(seed);
     const std::vector<Eigen::Isometry3d> truth = square_loop();
@@ -105,11 +105,17 @@ TEST(PoseGraph, DcsScalesDownAFalseLoopEdge) {
     std::vector<Eigen::Isometry3d> poses = drifted(truth, random, edges);
     for (std::size_t from : {std::size_t{40}, std::size_t{39}, std::size_t{38}})
       edges.push_back({from, 0, truth[0].inverse() * truth[from], information(0.5 * kPi / 180, 0.05), true});
-    // A false loop: pose 25 "seen" at pose 5 (they are 10 m apart).
-    edges.push_back({25, 5, Eigen::Isometry3d::Identity(), information(0.5 * kPi / 180, 0.05), true});
+    // A false unsure loop: pose 25 "seen" at pose 5 (they are 10 m apart), switchable.
+    edges.push_back({25, 5, Eigen::Isometry3d::Identity(), information(0.5 * kPi / 180, 0.05), false, true});
     const PoseGraphSummary summary = optimise_pose_graph(poses, edges);
     EXPECT_LT(summary.final_scale.back(), 0.05) << "seed " << seed;
     EXPECT_LT(position_rmse(poses, truth), 0.5) << "seed " << seed;
+    // A true switchable edge keeps its weight.
+    std::vector<PoseGraphEdge> true_edges(edges.begin(), edges.end() - 1);
+    true_edges.push_back({25, 5, truth[5].inverse() * truth[25], information(0.5 * kPi / 180, 0.05), false, true});
+    std::vector<Eigen::Isometry3d> again = drifted(truth, random, edges);
+    const PoseGraphSummary kept = optimise_pose_graph(again, true_edges);
+    EXPECT_GT(kept.final_scale.back(), 0.5) << "seed " << seed;
   }
 }
 
