@@ -113,7 +113,7 @@ RegistrationStatus decide_registration_status(const RegistrationFindings& findin
   const bool fits = !findings.fits_worse_than_identity && !findings.overlaps_too_little && !findings.half_turn_rival &&
                     !findings.half_turn_unclear && !findings.dense_search_unclear &&
                     !findings.overlap_unconfirmed && !findings.in_free_space && !findings.free_space_unjudged &&
-                    !findings.grounds_disagree;
+                    !findings.grounds_disagree && !findings.guess_disagrees;
   return sure && fits ? RegistrationStatus::Ok : RegistrationStatus::Ambiguous;
 }
 
@@ -485,16 +485,14 @@ void check_overlap(RegistrationResult& result, const PointCloud& source, const P
 
 namespace {
 
-// The points of `cloud` within the extraction's range limits around its sensor (within_range, as extraction crops).
-PointCloud crop_to_range(const PointCloud& cloud, const ExtractionOptions& extraction) {
-  std::vector<Eigen::Index> kept;
+// The indices of the points of `cloud` within the extraction's range limits around its sensor
+// (within_range, as extraction crops), ascending.
+std::vector<std::uint32_t> indices_in_range(const PointCloud& cloud, const ExtractionOptions& extraction) {
+  std::vector<std::uint32_t> kept;
   kept.reserve(cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i)
-    if (within_range(cloud.point(i), extraction)) kept.push_back(static_cast<Eigen::Index>(i));
-  PointCloud cropped;
-  cropped.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
-  for (std::size_t i = 0; i < kept.size(); ++i) cropped.positions.col(static_cast<Eigen::Index>(i)) = cloud.positions.col(kept[i]);
-  return cropped;
+    if (within_range(cloud.point(i), extraction)) kept.push_back(static_cast<std::uint32_t>(i));
+  return kept;
 }
 
 // The dense search's best optimum beats every distinct optimum by the margin, with every close
@@ -835,6 +833,7 @@ namespace {
 // clouds and the options only (prepare_checks).
 struct CheckInputs {
   PointCloud source, target;               // within the extraction's range, isolated points left out
+  std::vector<std::uint32_t> source_indices, target_indices;  // the cloud index of each of their points
   std::optional<TargetCoverage> coverage;  // the target hashed at measure_overlap's distance
   std::optional<DenseSearchPair> prepared; // both prepared for the ICP searches, when one may run
   std::optional<RangeImage> source_image, target_image;  // what each sensor saw, when the free-space check may run
@@ -872,39 +871,47 @@ CheckInputs prepare_checks(const PointCloud& source, const PointCloud& target, c
   };
   const ExtractionResult* source_chosen = chosen_by(source_extraction, source, options.source_extraction);
   const ExtractionResult* target_chosen = chosen_by(target_extraction, target, options.target_extraction);
-  // A side's points: the extraction's own, else cropped and, when `filter`, without isolated points.
+  // A side's points (and their indices in the cloud): the extraction's own, else cropped and, when
+  // `filter`, without isolated points (accompanied_points among the cropped ones, as
+  // without_isolated_points of the cropped cloud).
   const auto points_of = [&](const PointCloud& cloud, const ExtractionResult* chosen, const ExtractionOptions& side,
-                             bool filter, std::size_t& isolated) {
+                             bool filter, std::size_t& isolated, std::vector<std::uint32_t>& indices) {
     if (chosen) {
       isolated = chosen->isolated_points;
-      PointCloud selected;
-      selected.positions = cloud.positions(Eigen::all, chosen->measured.indices);
-      return selected;
+      indices = chosen->measured.indices;
+    } else {
+      indices = indices_in_range(cloud, side);
+      const std::size_t in_range = indices.size();
+      if (filter) indices = accompanied_points(cloud.positions.cast<double>(), indices, cell, neighbours);
+      isolated = in_range - indices.size();
     }
-    PointCloud cropped = crop_to_range(cloud, side);
-    const std::size_t in_range = cropped.size();
-    if (filter) cropped = without_isolated_points(cropped, cell, neighbours);
-    isolated = in_range - cropped.size();
-    return cropped;
+    PointCloud selected;
+    selected.positions = cloud.positions(Eigen::all, indices);
+    return selected;
   };
   CheckInputs inputs;
-  const bool prepare_search = may_answer && may_search(options);
+  const bool prepare_search = may_answer && (may_search(options) || options.initial_guess.has_value());
   const bool free_space = may_answer && options.ambiguity.free_space_limit >= 0.0;
   const Clock::time_point start = Clock::now();
   // The target is hashed once, for every overlap measured after. When the isolation cube is the
   // overlap's own distance (the default), that hash's cells also tell the isolated target points.
   tbb::parallel_invoke(
       [&] {
-        inputs.source = points_of(source, source_chosen, options.source_extraction, cell > 0.0, inputs.source_isolated_points);
+        inputs.source = points_of(source, source_chosen, options.source_extraction, cell > 0.0, inputs.source_isolated_points,
+                                  inputs.source_indices);
       },
       [&] {
         const bool hash_tells_isolated = !target_chosen && cell == distance;
         inputs.target = points_of(target, target_chosen, options.target_extraction, cell > 0.0 && !hash_tells_isolated,
-                                  inputs.target_isolated_points);
+                                  inputs.target_isolated_points, inputs.target_indices);
         inputs.coverage.emplace(inputs.target, distance);
         if (hash_tells_isolated) {
           const std::size_t hashed = inputs.target.size();
-          inputs.target.positions = inputs.target.positions(Eigen::all, inputs.coverage->leave_out_isolated_points(neighbours)).eval();
+          const std::vector<Eigen::Index> kept = inputs.coverage->leave_out_isolated_points(neighbours);
+          inputs.target.positions = inputs.target.positions(Eigen::all, kept).eval();
+          std::vector<std::uint32_t> kept_indices(kept.size());
+          for (std::size_t k = 0; k < kept.size(); ++k) kept_indices[k] = inputs.target_indices[static_cast<std::size_t>(kept[k])];
+          inputs.target_indices = std::move(kept_indices);
           inputs.target_isolated_points += hashed - inputs.target.size();
         }
       });
@@ -1027,6 +1034,119 @@ void verify_prepared(RegistrationResult& result, const CheckInputs& inputs, cons
   check_ground_agreement(result, options);
 }
 
+// What a back end uses of an `ok` or `ambiguous` answer (measure_answer_quality on the checks'
+// points), its indices mapped back to the clouds the checks were prepared from.
+void measure_quality(RegistrationResult& result, const CheckInputs& inputs, const RegistrationOptions& options) {
+  result.fitness = result.inlier_rmse = 0.0;
+  result.correspondences.clear();
+  result.information.setZero();
+  if (result.status != RegistrationStatus::Ok && result.status != RegistrationStatus::Ambiguous) return;
+  timed(result, "quality", [&] {
+    AnswerQuality quality = measure_answer_quality(inputs.source, inputs.target, result.transform, options.quality);
+    for (PointCorrespondence& pair : quality.correspondences)
+      pair = {inputs.source_indices[pair.first], inputs.target_indices[pair.second]};
+    result.fitness = quality.fitness;
+    result.inlier_rmse = quality.inlier_rmse;
+    result.correspondences = std::move(quality.correspondences);
+    result.information = quality.information;
+  });
+}
+
+// The correspondence distances of ICP from the initial guess: initial_guess_reach, halved down to
+// the dense search's own distance (which is always the last).
+std::vector<double> guess_reaches(const RegistrationOptions& options) {
+  const double finest = options.dense_search.correspondence_distance;
+  std::vector<double> reaches;
+  for (double reach = options.initial_guess_reach; reach > finest && reaches.size() < 16; reach /= 2.0) reaches.push_back(reach);
+  reaches.push_back(finest);
+  return reaches;
+}
+
+// The answer of local registration: point-to-plane ICP from `options.initial_guess` on the checks'
+// prepared pair (refine_answer at each of guess_reaches, coarse to fine), with the models for the
+// checks. Its status is provisional (`ok`: no quadric rival to be unsure about); verify_prepared decides.
+RegistrationResult answer_from_guess(const SceneModel& source, const SceneModel& target, const CheckInputs& inputs,
+                                     const RegistrationOptions& options) {
+  RegistrationResult result;
+  result.source_model = source;
+  result.target_model = target;
+  result.counts.source_quadrics = count_quadrics(source);
+  result.counts.target_quadrics = count_quadrics(target);
+  result.counts.source_augmented_points = source.augmented_count();
+  result.counts.target_augmented_points = target.augmented_count();
+  result.from_initial_guess = true;
+  const Eigen::Isometry3d guess = *options.initial_guess;
+  if (!inputs.prepared) {
+    result.findings.estimation_failure = RegistrationStatus::Failed;
+    result.message = "no points to align from the initial guess (a cloud is empty within its range limits)";
+    decide(result);
+    return result;
+  }
+  timed(result, "guess_icp", [&] {
+    DenseSearchOptions icp = options.dense_search;
+    Eigen::Isometry3d transform = guess;
+    for (const double reach : guess_reaches(options)) {
+      icp.correspondence_distance = reach;
+      transform = refine_answer(*inputs.prepared, transform, ground_of(source), icp).transform;
+    }
+    result.transform = transform;
+  });
+  std::ostringstream summary;
+  summary.precision(3);
+  summary << "point-to-plane ICP from the initial guess (moved it " << translation_error(result.transform, guess) << " m, "
+          << rotation_error_degrees(result.transform, guess) << " deg)";
+  result.message = summary.str();
+  decide(result);
+  return result;
+}
+
+// Rank of a verified status: `ok` before `ambiguous` before no answer.
+int status_rank(RegistrationStatus status) {
+  return status == RegistrationStatus::Ok ? 0 : status == RegistrationStatus::Ambiguous ? 1 : 2;
+}
+
+// The global answer and the one from the initial guess, both verified, compete: the better status
+// wins, then (same status) the one landing more of the source on the target (check_overlap's
+// measure); the global answer wins ties. Two `ok` answers that disagree leave the winner
+// `ambiguous` (findings.guess_disagrees). The result keeps the global run's candidates and counts,
+// and its timings with the guess's run added as "initial_guess".
+RegistrationResult compete_with_guess(RegistrationResult global, RegistrationResult guessed, const RegistrationOptions& options) {
+  const auto overlap_of = [](const RegistrationResult& r) { return r.overlap ? r.overlap->transformed : 0.0; };
+  const int global_rank = status_rank(global.status), guess_rank = status_rank(guessed.status);
+  const bool guess_wins = guess_rank < global_rank || (guess_rank == global_rank && guess_rank < 2 && overlap_of(guessed) > overlap_of(global));
+  const bool both_ok = global_rank == 0 && guess_rank == 0;
+  const bool disagree = translation_error(global.transform, guessed.transform) > options.ambiguity.translation_disagreement ||
+                        rotation_error_degrees(global.transform, guessed.transform) > options.ambiguity.rotation_disagreement_degrees;
+  double guess_ms = 0.0;
+  for (const auto& [stage, ms] : guessed.timings_ms) guess_ms += ms;
+  std::ostringstream other;
+  other.precision(3);
+  const RegistrationResult& loser = guess_wins ? global : guessed;
+  other << "; " << (guess_wins ? "the initial guess's answer won over the global one" : "the global answer won over the initial guess's")
+        << " (" << registration_status_name(loser.status) << ", overlap " << overlap_of(loser) << ", "
+        << translation_error(global.transform, guessed.transform) << " m and "
+        << rotation_error_degrees(global.transform, guessed.transform) << " deg apart)";
+  RegistrationResult winner = std::move(guess_wins ? guessed : global);
+  if (guess_wins) {
+    winner.candidates = std::move(global.candidates);
+    winner.counts = global.counts;
+    winner.best_to_second_ratio = global.best_to_second_ratio;
+    winner.best_candidate = winner.candidates.size();
+    std::map<std::string, double> timings = std::move(global.timings_ms);
+    timings["initial_guess"] = guess_ms;
+    winner.timings_ms = std::move(timings);
+  } else {
+    winner.timings_ms["initial_guess"] = guess_ms;
+  }
+  winner.message += other.str();
+  if (both_ok && disagree) {
+    winner.findings.guess_disagrees = true;
+    winner.message += ": both verified ok, not sure";
+    decide(winner);
+  }
+  return winner;
+}
+
 }  // namespace
 
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
@@ -1035,8 +1155,9 @@ void verify_registration(RegistrationResult& result, const PointCloud& source, c
   // The answer is known here: the searches' and the free-space check's preparation is paid only
   // when there is an answer to check.
   const bool may_answer = result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous;
-  verify_prepared(result, prepare_checks(source, target, options, source_extraction, target_extraction, may_answer),
-                  options);
+  const CheckInputs inputs = prepare_checks(source, target, options, source_extraction, target_extraction, may_answer);
+  verify_prepared(result, inputs, options);
+  measure_quality(result, inputs, options);
 }
 
 bool lacks_augmentation_of(const SceneModel& model, const SceneModel& other) {
@@ -1053,6 +1174,13 @@ bool augment_other_side(const PointCloud& cloud, ModellingResult& modelling, con
 RegistrationResult register_modelled_clouds(const ModelledCloud& source, const ModelledCloud& target,
                                             const RegistrationOptions& options, const ModelAdjustment& adjust_models) {
   const Clock::time_point start = Clock::now();
+  if (options.local_only && !options.initial_guess)
+    throw Error("local registration (local_only) needs an initial guess (RegistrationOptions::initial_guess)");
+  if (options.initial_guess && !options.initial_guess->matrix().allFinite())
+    throw Error("the initial guess must be a finite rigid transform");
+  if (options.initial_guess && !(options.initial_guess_reach > 0.0))
+    throw Error("option 'initial_guess_reach' must be positive, got " + std::to_string(options.initial_guess_reach));
+  validate_answer_quality_options(options.quality);
   const ModellingResult* source_modelling = source.modelling;
   const ModellingResult* target_modelling = target.modelling;
   double source_ms = source.modelling_ms;
@@ -1060,7 +1188,7 @@ RegistrationResult register_modelled_clouds(const ModelledCloud& source, const M
   // delta_a is decided per cloud, but augmented points only match augmented points: when one side
   // fell below delta_a and the other did not, augment the other too (on a copy: the caller's model stays).
   std::optional<ModellingResult> augmented;
-  if (options.correspondences.match_augmented_points) {
+  if (options.correspondences.match_augmented_points && !options.local_only) {
     const auto augment = [&](const ModelledCloud& side, const ModellingResult& other, double& side_ms) {
       if (!lacks_augmentation_of(side.modelling->model, other.model)) return false;
       const Clock::time_point stage = Clock::now();
@@ -1077,19 +1205,32 @@ RegistrationResult register_modelled_clouds(const ModelledCloud& source, const M
   // The checks' inputs and the searches' preparation depend on the clouds only, so they are made
   // while the quadrics are matched (~25 ms beside ~10 on a KITTI pair; docs/registration.md, "Time").
   // They are wasted when no answer comes out, which costs the difference.
+  // Local registration matches no quadrics: the models serve the checks only.
   RegistrationResult result;
   std::optional<CheckInputs> inputs;
+  const auto model_of = [&](const ModellingResult& modelling) {
+    return adjust_models ? adjust_models(modelling.model) : modelling.model;
+  };
   tbb::parallel_invoke(
       [&] {
-        result = adjust_models
-                     ? register_models(adjust_models(source_modelling->model), adjust_models(target_modelling->model), options)
-                     : register_models(source_modelling->model, target_modelling->model, options);
+        if (!options.local_only) result = register_models(model_of(*source_modelling), model_of(*target_modelling), options);
       },
       [&] {
         inputs = prepare_checks(*source.cloud, *target.cloud, options, &source_modelling->extraction,
                                 &target_modelling->extraction, true);
       });
-  verify_prepared(result, *inputs, options);
+  if (options.local_only) {
+    result = answer_from_guess(model_of(*source_modelling), model_of(*target_modelling), *inputs, options);
+    verify_prepared(result, *inputs, options);
+  } else {
+    verify_prepared(result, *inputs, options);
+    if (options.initial_guess) {
+      RegistrationResult guessed = answer_from_guess(result.source_model, result.target_model, *inputs, options);
+      verify_prepared(guessed, *inputs, options);
+      result = compete_with_guess(std::move(result), std::move(guessed), options);
+    }
+  }
+  measure_quality(result, *inputs, options);
   result.timings_ms["modelling_source"] = source_ms;
   result.timings_ms["modelling_target"] = target_ms;
   const bool concurrent = source.modelled_concurrently && target.modelled_concurrently;

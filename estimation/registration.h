@@ -11,6 +11,7 @@
 // be scored.
 #pragma once
 
+#include "estimation/answer_quality.h"
 #include "estimation/candidate_selection.h"
 #include "estimation/dense_search.h"
 #include "estimation/free_space.h"
@@ -100,6 +101,20 @@ struct RegistrationOptions {
   SelectionOptions selection;                 ///< Φ = 0.5 DCS, δ_g^e = 5 deg (ground normals are filled in by the pipeline)
   AmbiguityOptions ambiguity;                 ///< when the answer is reported as ambiguous
   DenseSearchOptions dense_search;            ///< the ICP search that settles an ambiguous answer (verify_registration)
+  AnswerQualityOptions quality;               ///< the fitness, inlier RMSE, correspondences and information of the final answer (measure_answer_quality)
+  /// A pose the caller already has (odometry, a previous answer), mapping source into target in the
+  /// frame the registration works in. With `local_only` it is the only start; without, the global
+  /// answer and the answer from the guess are both verified and compete (register_modelled_clouds).
+  std::optional<Eigen::Isometry3d> initial_guess;
+  /// Skip the quadric matching (correspondences, graphs, cliques, candidates, selection): align by
+  /// point-to-plane ICP from `initial_guess` (required) and let the same verification decide `ok` or
+  /// `ambiguous`. Both clouds are still modelled: the checks measure heights from their grounds.
+  bool local_only = false;
+  /// ICP from the initial guess first pairs points up to this far apart, m, then half as far, and so
+  /// on down to dense_search.correspondence_distance: a guess 1 m and 5 degrees off moves points 30 m
+  /// away by 2.6 m (at most that distance is what the first pass must reach; at or below
+  /// dense_search.correspondence_distance: a single pass).
+  double initial_guess_reach = 4.0;
 };
 
 /// One transformation candidate T_k (one per clique level).
@@ -154,6 +169,7 @@ struct RegistrationFindings {
   bool in_free_space = false;             ///< the answer puts more points in the other sensor's free space than AmbiguityOptions::free_space_limit (check_free_space)
   bool free_space_unjudged = false;       ///< the free-space check could not judge the answer (no ground in a model, or fewer than 100 points tested a side), so it is not vouched for (check_free_space)
   bool grounds_disagree = false;          ///< the answer tilts the source's ground from the target's by more than AmbiguityOptions::ground_tilt_limit_degrees (check_ground_agreement)
+  bool guess_disagrees = false;           ///< the global answer and the answer from RegistrationOptions::initial_guess were both verified `ok` and disagree (AmbiguityOptions::translation_disagreement, rotation_disagreement_degrees)
 };
 
 /// The half-turn check of an answer (check_half_turn): how well the answer and its mirror image fit.
@@ -178,7 +194,7 @@ struct RegistrationResult {
   RegistrationStatus status = RegistrationStatus::Failed;       ///< see RegistrationStatus; decide_registration_status(findings)
   RegistrationFindings findings;                                ///< what the stages found, behind `status`
   std::string message;                                          ///< why, for any status but ok; a short summary otherwise
-  std::size_t best_candidate = 0;                               ///< index of T* in `candidates`
+  std::size_t best_candidate = 0;                               ///< index of T* in `candidates` (candidates.size() when the answer came from the initial guess)
   std::vector<RegistrationCandidate> candidates;                ///< every candidate with its score, in level order
   double best_to_second_ratio = 0.0;                            ///< D_v(best) / D_v(second best valid); 0 with fewer than 2
   RegistrationCounts counts;                                    ///< counts of every stage
@@ -193,6 +209,23 @@ struct RegistrationResult {
   std::vector<GroundPose> ground_correlation;                   ///< the correlation over the ground's poses, best first, which the dense search started from (empty when it did not run)
   std::optional<HalfTurnCheck> half_turn;                       ///< the last half-turn check (check_half_turn), when one ran
   std::optional<FreeSpaceMeasure> free_space;                   ///< the free-space check of the final answer (check_free_space), when it ran
+  /// Where the answer comes from: false for the quadric matching, true for ICP from
+  /// RegistrationOptions::initial_guess (always with local_only; with a guess and no local_only,
+  /// when the guess's verified answer won).
+  bool from_initial_guess = false;
+  // What a back end uses (measure_answer_quality of the final answer, options.quality), filled for
+  // every `ok` or `ambiguous` answer (zero / empty otherwise). Measured on the checks' points: the
+  // clouds within their extraction's range limits without their isolated points (verify_registration).
+  double fitness = 0.0;      ///< share of the checks' source points with a target point within quality.correspondence_distance after `transform` (Open3D's fitness), [0, 1]
+  double inlier_rmse = 0.0;  ///< root mean square of those inliers' point-to-point distances, m (Open3D's inlier_rmse)
+  /// The inliers, (source index, target index), indices into the clouds given to register_clouds /
+  /// register_modelled_clouds (the checks' crop and filter are mapped back); every source index once.
+  std::vector<PointCorrespondence> correspondences;
+  /// H = J^T J of the point-to-plane cost over `correspondences` at `transform` (as small_gicp
+  /// returns H): order rotation then translation, perturbation on the left in the TARGET frame,
+  /// T = Exp(δ) T* (AnswerQuality::information). Symmetric positive semi-definite, growing with the
+  /// inliers; a pose graph's edge information for unit-variance (metre) residuals.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 /// The factor options of candidate estimation between two models (Algorithm 1): Augment(), f_pp over
@@ -244,6 +277,15 @@ using ModelAdjustment = std::function<SceneModel(const SceneModel&)>;
 /// then verify_registration on the clouds; the checks' inputs and the searches' preparation, which
 /// need no answer, are made while register_models runs. Fills the counts of points and elements, the
 /// modelling timings and "total" (both modelling_ms, or the longer when modelled_concurrently, plus this call).
+/// With `options.local_only`, no quadric is matched: the answer is point-to-plane ICP from
+/// `options.initial_guess` (coarse to fine from `initial_guess_reach`), verified by the same checks
+/// (candidates empty, result.from_initial_guess). With an initial guess and not local_only, that
+/// answer is verified beside the global one and they compete: the better status wins, then the
+/// larger overlap (the global answer on ties); two `ok` answers that disagree leave the winner
+/// `ambiguous` (findings.guess_disagrees). Last, measure_answer_quality of the answer fills fitness,
+/// inlier_rmse, correspondences and information ("quality" timing). Throws quadrix::Error for
+/// local_only without a guess, a non-finite guess, a reach that is not positive or quality options
+/// out of range.
 RegistrationResult register_modelled_clouds(const ModelledCloud& source, const ModelledCloud& target,
                                             const RegistrationOptions& options = {},
                                             const ModelAdjustment& adjust_models = {});
@@ -333,7 +375,9 @@ void check_ground_agreement(RegistrationResult& result, const RegistrationOption
 /// "ground_correlation", "dense_search" and "free_space" timings. `source_extraction` and `target_extraction`, when given, are the
 /// extractions of the two clouds: the points they worked on (ExtractionResult::measured) are
 /// taken as the checks' points when they were chosen by the checks' own range limits and
-/// isolated-point rule (else the clouds are cropped and filtered here).
+/// isolated-point rule (else the clouds are cropped and filtered here). Last, measure_answer_quality of
+/// the answer on the checks' points fills fitness, inlier_rmse, correspondences (indices into
+/// `source` and `target`) and information ("quality" timing).
 void verify_registration(RegistrationResult& result, const PointCloud& source, const PointCloud& target,
                          const RegistrationOptions& options, const ExtractionResult* source_extraction = nullptr,
                          const ExtractionResult* target_extraction = nullptr);

@@ -202,6 +202,9 @@ std::vector<RegistrationConfigKey> make_registration_config_keys() {
       shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::maximum_height>("dense_search.correlation.maximum_height", "points higher than this above their ground are left out, m (> minimum_height)"),
       shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::separation>("dense_search.correlation.separation", "poses closer than this in translation to a better one (and within separation_degrees) are not reported, m (>= 0)"),
       shared_key<&R::dense_search, &DenseSearchOptions::correlation, &G::separation_degrees>("dense_search.correlation.separation_degrees", "poses closer than this in yaw to a better one (and within separation) are not reported, degrees (>= 0)"),
+      shared_key<&R::quality, &AnswerQualityOptions::correspondence_distance>("quality.correspondence_distance", "a source point with a target point within this after the answer is an inlier (fitness, inlier RMSE, correspondences, information), m (> 0)"),
+      shared_key<&R::quality, &AnswerQualityOptions::normal_neighbours>("quality.normal_neighbours", "target points of each inlier's normal fit (information), points (>= 3)"),
+      shared_key<&R::initial_guess_reach>("initial_guess_reach", "ICP from an initial guess first pairs points up to this far apart, then halves it down to dense_search.correspondence_distance, m (> 0)"),
   };
 }
 

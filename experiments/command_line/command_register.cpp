@@ -1,10 +1,13 @@
 // `quadrix register SOURCE TARGET [--preset vlp64|vlp16|mid360|avia|monument|auto] [--config FILE.yaml]
 // [--source-preset P --target-preset P] [--source-origin X,Y,Z --target-origin X,Y,Z]
-// [--labels-source F --labels-target F [--label-classes C,...]] [--gt FILE] [--out DIR]`:
+// [--labels-source F --labels-target F [--label-classes C,...]] [--gt FILE] [--initial-guess FILE [--local]]
+// [--out DIR]`:
 // global registration of two clouds with quadrics (paper Fig. overview, Algorithm 1). Prints the 4x4
 // transform mapping SOURCE points into the TARGET frame and a one-line summary; with --gt also RTE,
 // RRE and success (2 m / 5 deg, between the sensors' frames); --source-origin/--target-origin give
-// where each sensor stood in its file's frame (the clouds are registered centred there); with --out writes report.json, merged.ply, bev.png, both models
+// where each sensor stood in its file's frame (the clouds are registered centred there); --initial-guess
+// gives a pose to start from (competing with the global answer; with --local, the only start: ICP,
+// no quadric matching); with --out writes report.json, merged.ply, bev.png, both models
 // (source_model.json, target_model.json) and the interactive page view.html (unless --no-page).
 // The exit status is 0 whenever a registration ran (its status says ok / ambiguous / degenerate /
 // failed); 2 on bad input (unreadable file, unknown preset or config key).
@@ -40,6 +43,8 @@ struct RegisterCommandOptions {
   std::string labels_target;   ///< SemanticKITTI labels of the target
   std::string label_classes;   ///< take only these classes from the labels (comma-separated), the rest from geometry
   std::string ground_truth;    ///< 4x4 T_gt (source -> target) for RTE/RRE
+  std::string initial_guess;   ///< 4x4 or 3x4 pose (source -> target) to start from
+  bool local = false;          ///< ICP from the initial guess only (RegistrationOptions::local_only)
   std::string out;             ///< output folder
   std::string refiner;         ///< refiner override (ceres | nlopt)
   bool no_page = false;        ///< skip view.html in the output folder
@@ -59,6 +64,10 @@ void run(const RegisterCommandOptions& options) {
   std::optional<Eigen::Isometry3d> ground_truth;
   if (!options.ground_truth.empty())
     ground_truth = between_sensor_frames(read_pose_matrix(options.ground_truth), source_origin, target_origin);
+  if (options.local && options.initial_guess.empty()) throw Error("--local needs --initial-guess FILE (the pose to start from)");
+  std::optional<Eigen::Isometry3d> initial_guess;
+  if (!options.initial_guess.empty())
+    initial_guess = between_sensor_frames(read_pose_matrix(options.initial_guess), source_origin, target_origin);
 
   const Clock::time_point start = Clock::now();
   const PointCloud source = centred_on_sensor(read_point_cloud(options.source), source_origin);
@@ -87,6 +96,8 @@ void run(const RegisterCommandOptions& options) {
     registration.source_extraction.label_classes = registration.target_extraction.label_classes =
         parse_label_classes(options.label_classes);
   }
+  registration.initial_guess = initial_guess;
+  registration.local_only = options.local;
   const RegistrationResult result = register_clouds(source, target, registration, source_labels, target_labels);
   const double total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 
@@ -99,15 +110,21 @@ void run(const RegisterCommandOptions& options) {
   const RegistrationCounts& c = result.counts;
   std::string cliques;
   for (const std::size_t size : c.clique_sizes) cliques += (cliques.empty() ? "" : "/") + std::to_string(size);
+  // A stage that did not run (local registration matches no quadrics) took 0 ms.
+  const auto ms = [&](const char* stage) {
+    const auto found = result.timings_ms.find(stage);
+    return found == result.timings_ms.end() ? 0.0 : found->second;
+  };
   std::printf("status %s | %.0f ms total (load %.0f, preset %.0f, model %.0f + %.0f, match %.0f, estimate %.0f, select %.0f) | "
               "quadrics %zu/%zu, correspondences %zu, cliques %s",
-              registration_status_name(result.status), total_ms, load_ms, preset_ms, result.timings_ms.at("modelling_source"),
-              result.timings_ms.at("modelling_target"),
-              result.timings_ms.at("correspondences") + result.timings_ms.at("graphs") + result.timings_ms.at("cliques"),
-              result.timings_ms.at("estimation"), result.timings_ms.at("selection"), c.source_quadrics, c.target_quadrics,
-              c.correspondences, cliques.empty() ? "-" : cliques.c_str());
+              registration_status_name(result.status), total_ms, load_ms, preset_ms, ms("modelling_source"),
+              ms("modelling_target"), ms("correspondences") + ms("graphs") + ms("cliques"), ms("estimation"),
+              ms("selection"), c.source_quadrics, c.target_quadrics, c.correspondences, cliques.empty() ? "-" : cliques.c_str());
   const OverlapMeasure overlap = *result.overlap;  // register_clouds measured it (check_overlap)
   std::printf(" | overlap %.2f (unmoved %.2f) at %.1f m", overlap.transformed, overlap.identity, overlap.distance);
+  if (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous)
+    std::printf(" | fitness %.3f, inlier RMSE %.3f m%s", result.fitness, result.inlier_rmse,
+                result.from_initial_guess ? ", from the initial guess" : "");
   if (c.source_isolated_points + c.target_isolated_points > 0)
     std::printf(", %zu + %zu isolated points left out", c.source_isolated_points, c.target_isolated_points);
   if (ground_truth) {
@@ -195,6 +212,11 @@ const CommandRegistration registration(60, [](CLI::App& app) {
                       "every other point is modelled from geometry");
   command->add_option("--gt", options->ground_truth, "Ground-truth 4x4 (maps source into target): print RTE/RRE/success");
   command->add_option("--refiner", options->refiner, "Refiner backend override: ceres | nlopt");
+  command->add_option("--initial-guess", options->initial_guess,
+                      "A pose to start from, 4x4 or 3x4 text (maps source into target, files' frames, as --gt): its "
+                      "ICP answer is verified beside the global one and the better wins");
+  command->add_flag("--local", options->local,
+                    "With --initial-guess: skip the global quadric matching, ICP from the guess only (verified as usual)");
   command->add_option("--out", options->out,
                       "Folder for report.json, merged.ply, bev.png, source_model.json, target_model.json and view.html");
   command->add_flag("--no-page", options->no_page, "With --out: do not write the interactive page view.html");

@@ -74,6 +74,19 @@ std::string registration_report_json(const RegistrationResult& result, const Reg
   report["transform"] = matrix_json(result.transform);
   report["status"] = registration_status_name(result.status);
   report["message"] = result.message;
+  // What a back end uses: Open3D's evaluation and small_gicp's information (rotation then
+  // translation, left perturbation in the target frame; RegistrationResult::information).
+  nlohmann::json information = nlohmann::json::array();
+  for (int r = 0; r < 6; ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int c = 0; c < 6; ++c) row.push_back(result.information(r, c));
+    information.push_back(row);
+  }
+  report["fitness"] = result.fitness;
+  report["inlier_rmse_m"] = result.inlier_rmse;
+  report["correspondence_count"] = result.correspondences.size();
+  report["information"] = information;
+  report["from_initial_guess"] = result.from_initial_guess;
   nlohmann::json timings;
   timings["total"] = context.total_ms;
   timings["load"] = context.load_ms;

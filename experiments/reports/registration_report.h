@@ -36,7 +36,10 @@ struct RegistrationReportContext {
 /// selection, "registration" = register_clouds' own total), "counts", "candidates" (one object per
 /// level: level, threshold_m, clique_size, refinement_status, valid, selected, score, pair_count,
 /// filtered_count, term_count, factor_count, transform, note, clique: [[source record, target record], ...] of I*_k),
-/// "best_to_second_ratio", "input"
+/// "best_to_second_ratio", "fitness", "inlier_rmse_m", "correspondence_count" (RegistrationResult's
+/// fitness, inlier_rmse and correspondences.size(); the pairs themselves are left to the API),
+/// "information" (6x6 row-major, rotation then translation, left perturbation in the target frame),
+/// "from_initial_guess", "input"
 /// (paths and presets), with sensor origins other than zero "sensor_origins" {source, target,
 /// transform_between_files: the answer between the files' own frames (between_cloud_frames); every
 /// other transform of the report is between the sensor-centred clouds}, with a ground truth

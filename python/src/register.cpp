@@ -5,6 +5,7 @@
 
 #include "estimation/registration_config.h"
 #include "experiments/reports/registration_report.h"
+#include "geometry/error.h"
 #include "geometry/io.h"
 
 #include <pybind11/stl.h>
@@ -80,7 +81,41 @@ as an answer when it is ok.
       .def_property_readonly("ground_truth", [](const Registration& r) { return report_entry(r, "ground_truth"); },
                              "report.json's ground_truth {transform, rte_m, rre_deg, success} when ground_truth= was given, else None.")
       .def_property_readonly("best_candidate", [](const Registration& r) { return r.result.best_candidate; },
-                             "Index of the chosen candidate in ``candidates``.")
+                             "Index of the chosen candidate in ``candidates`` (len(candidates) when the answer came from the initial guess).")
+      .def_property_readonly("fitness", [](const Registration& r) { return r.result.fitness; },
+                             "Share of the source points (within range, isolated points left out) with a target point within "
+                             "0.3 m (config quality.correspondence_distance) after ``transform``, as Open3D's fitness; 0 unless ok/ambiguous.")
+      .def_property_readonly("inlier_rmse", [](const Registration& r) { return r.result.inlier_rmse; },
+                             "Root mean square of those inliers' point-to-point distances, m (Open3D's inlier_rmse).")
+      .def_property_readonly(
+          "correspondences",
+          [](const Registration& r) {
+            py::array_t<std::int64_t> pairs(std::vector<py::ssize_t>{static_cast<py::ssize_t>(r.result.correspondences.size()), 2});
+            auto view = pairs.mutable_unchecked<2>();
+            for (std::size_t k = 0; k < r.result.correspondences.size(); ++k) {
+              view(static_cast<py::ssize_t>(k), 0) = static_cast<std::int64_t>(r.result.correspondences[k].first);
+              view(static_cast<py::ssize_t>(k), 1) = static_cast<std::int64_t>(r.result.correspondences[k].second);
+            }
+            return pairs;
+          },
+          "(N, 2) int64: the inliers as (source index, target index), rows of the clouds given, each source point once.")
+      .def_property_readonly(
+          "information",
+          [](const Registration& r) {
+            // About the target frame given (its origin), as ``transform`` is between the frames given.
+            const Eigen::Matrix<double, 6, 6> information =
+                information_about_shifted_origin(r.result.information, r.target_origin);
+            py::array_t<double> matrix(std::vector<py::ssize_t>{6, 6});
+            auto view = matrix.mutable_unchecked<2>();
+            for (int i = 0; i < 6; ++i)
+              for (int j = 0; j < 6; ++j) view(i, j) = information(i, j);
+            return matrix;
+          },
+          "(6, 6) float64: H = J^T J of the point-to-plane cost over ``correspondences`` at ``transform``, as "
+          "small_gicp returns H: order rotation then translation, perturbation on the left in the TARGET frame "
+          "(T = Exp(delta) @ transform, rotation about the target frame's origin). A pose graph's edge information.")
+      .def_property_readonly("from_initial_guess", [](const Registration& r) { return r.result.from_initial_guess; },
+                             "True when the answer is ICP from ``initial_guess`` (always with local_only=True).")
       .def_readonly("report", &Registration::report, "The whole report.json content as a dict.")
       .def_property_readonly("source_model", [](const Registration& r) { return side_model(r.result.source_model); },
                              "The source's quadrix.Model (R_x) as registered.")
@@ -105,7 +140,8 @@ as an answer when it is ok.
       [](const py::object& source_object, const py::object& target_object, const std::string& preset,
          const py::object& config, const py::object& refiner, const py::object& source_preset,
          const py::object& target_preset, const py::object& source_labels, const py::object& target_labels,
-         const py::object& ground_truth, const py::object& source_origin, const py::object& target_origin) {
+         const py::object& ground_truth, const py::object& source_origin, const py::object& target_origin,
+         const py::object& initial_guess, bool local_only) {
         using Clock = std::chrono::steady_clock;
         auto registration = std::make_shared<Registration>();
         registration->source_origin = point_from_object(source_origin, "source_origin");
@@ -117,6 +153,11 @@ as an answer when it is ok.
         if (!ground_truth.is_none())
           truth = between_sensor_frames(pose_from_object(ground_truth, "ground_truth"), registration->source_origin,
                                         registration->target_origin);
+        std::optional<Eigen::Isometry3d> guess;
+        if (!initial_guess.is_none())
+          guess = between_sensor_frames(pose_from_object(initial_guess, "initial_guess"), registration->source_origin,
+                                        registration->target_origin);
+        if (local_only && !guess) throw Error("local_only=True needs initial_guess (a 4x4 pose to start from)");
         const Clock::time_point start = Clock::now();
         std::shared_ptr<Cloud> source_holder, target_holder;
         RegistrationReportContext context;
@@ -135,9 +176,11 @@ as an answer when it is ok.
         context.load_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 
         std::string notes;
-        const RegistrationOptions options = registration_options_from(
+        RegistrationOptions options = registration_options_from(
             source_preset.is_none() ? preset : source_preset.cast<std::string>(), source,
             target_preset.is_none() ? preset : target_preset.cast<std::string>(), target, config, refiner, &notes);
+        options.initial_guess = guess;
+        options.local_only = local_only;
         {
           py::gil_scoped_release release;
           registration->result = register_clouds(source, target, options, source_point_labels, target_point_labels);
@@ -158,10 +201,10 @@ as an answer when it is ok.
       py::arg("refiner") = py::none(), py::kw_only(), py::arg("source_preset") = py::none(),
       py::arg("target_preset") = py::none(), py::arg("source_labels") = py::none(),
       py::arg("target_labels") = py::none(), py::arg("ground_truth") = py::none(), py::arg("source_origin") = py::none(),
-      py::arg("target_origin") = py::none(), R"doc(
+      py::arg("target_origin") = py::none(), py::arg("initial_guess") = py::none(), py::arg("local_only") = false, R"doc(
 Registers ``source`` onto ``target`` globally with quadrics, as ``quadrix register`` does, and returns
 a quadrix.RegistrationResult (transform, status, message, timings_ms, counts, candidates, overlap:
-report.json's content).
+report.json's content; and fitness, inlier_rmse, correspondences, information for a back end).
 
 source, target: each a quadrix.Cloud, an (N, 3) array (any real dtype; float32 C-contiguous is
     copied once with memcpy) or a file path (str / os.PathLike, any format read_cloud reads).
@@ -178,6 +221,12 @@ source_origin, target_origin: where each side's sensor stood in its cloud's fram
     metres (as ``--source-origin``; keyword-only); None: the origin. For clouds in a map's frame: they
     are registered centred on their sensors, ``transform`` is between the frames given, and the
     report's other transforms and the models are between the sensor-centred clouds.
+initial_guess: optional 4x4 pose mapping source into target (odometry, a previous answer; keyword-only),
+    in the frames given. Point-to-plane ICP from it is verified beside the global answer and the
+    better verified one wins (``ok`` over ``ambiguous``, then the larger overlap; two ``ok`` answers
+    that disagree leave the winner ``ambiguous``).
+local_only: with ``initial_guess``: skip the global quadric matching; the answer is ICP from the
+    guess, and the same checks decide ok or ambiguous (keyword-only).
 
 The GIL is released while the pipeline runs, so threads can register pairs concurrently.
 Raises FileNotFoundError for a missing file, ValueError naming the file for an unreadable one or a
