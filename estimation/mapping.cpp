@@ -221,6 +221,45 @@ MapEdge register_pair(std::size_t from, std::size_t to, MapEdgeKind kind, const 
   return edge;
 }
 
+/// Odometry of scan `from` onto the previous scan `to`: point-to-plane ICP from `guess` (the previous
+/// motion) verified by the registration's checks (RegistrationOptions::local_only); when that is not
+/// `ok`, global registration from the models (register_pair).
+MapEdge register_consecutive(std::size_t from, std::size_t to, const Eigen::Isometry3d& guess, const std::vector<ScanModel>& models,
+                             CloudCache& clouds, const MapOptions& options) {
+  const Clock::time_point start = Clock::now();
+  RegistrationOptions registration = models[from].options;
+  registration.target_extraction = models[to].options.source_extraction;
+  registration.initial_guess = guess;
+  registration.local_only = true;
+  ModellingResult source_modelling, target_modelling;  // the cached models; the checks crop the clouds themselves
+  source_modelling.model = models[from].model;
+  target_modelling.model = models[to].model;
+  RegistrationResult result;
+  {
+    const std::shared_ptr<const PointCloud> source_cloud = clouds.get(from);
+    const std::shared_ptr<const PointCloud> target_cloud = clouds.get(to);
+    result = register_modelled_clouds({source_cloud.get(), &source_modelling, 0.0, false},
+                                      {target_cloud.get(), &target_modelling, 0.0, false}, registration);
+  }
+  if (result.status != RegistrationStatus::Ok) {
+    MapEdge edge = register_pair(from, to, MapEdgeKind::Odometry, models, clouds, options);
+    edge.note = "local alignment " + std::string(registration_status_name(result.status)) + ", global registration used" +
+                (edge.note.empty() ? "" : "; " + edge.note);
+    edge.registration_ms = elapsed_ms(start);
+    return edge;
+  }
+  MapEdge edge;
+  edge.from = from;
+  edge.to = to;
+  edge.kind = MapEdgeKind::Odometry;
+  edge.status = registration_status_name(result.status);
+  edge.transform = result.transform;
+  edge.overlap = result.overlap ? result.overlap->transformed : 0.0;
+  edge.note = "local alignment from the previous motion";
+  edge.registration_ms = elapsed_ms(start);
+  return edge;
+}
+
 /// Distance travelled along a session's odometry from scan `first` to scan `last` (indices into poses).
 std::vector<double> path_lengths(const std::vector<Eigen::Isometry3d>& poses, std::size_t begin, std::size_t end) {
   std::vector<double> length(end - begin, 0.0);
@@ -268,18 +307,18 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       if (list.scans[index].odometry) continue;
       consecutive.emplace_back(index, index - 1);
     }
-  std::vector<MapEdge> registered(consecutive.size());
   if (!consecutive.empty() && !options.register_consecutive)
     throw Error(list.source + ": session '" + list.scans[consecutive.front().first].session +
                 "' has no odometry and registering consecutive scans is off");
-  {
-    std::mutex mutex;
-    std::size_t done = 0;
-    tbb::parallel_for(std::size_t{0}, consecutive.size(), [&](std::size_t pair) {
-      registered[pair] = register_pair(consecutive[pair].first, consecutive[pair].second, MapEdgeKind::Odometry, models, clouds, options);
-      std::lock_guard<std::mutex> lock(mutex);
-      if (progress) progress("consecutive scans registered", ++done, consecutive.size());
-    });
+  // In time order: each step starts from the previous one's motion (identity for the first).
+  std::vector<MapEdge> registered(consecutive.size());
+  for (std::size_t pair = 0; pair < consecutive.size(); ++pair) {
+    const bool continues = pair > 0 && consecutive[pair - 1].first + 1 == consecutive[pair].first &&
+                           session_of[consecutive[pair - 1].first] == session_of[consecutive[pair].first];
+    const bool answered = continues && (registered[pair - 1].status == "ok" || registered[pair - 1].status == "ambiguous");
+    const Eigen::Isometry3d guess = answered ? registered[pair - 1].transform : Eigen::Isometry3d::Identity();
+    registered[pair] = register_consecutive(consecutive[pair].first, consecutive[pair].second, guess, models, clouds, options);
+    if (progress) progress("consecutive scans registered", pair + 1, consecutive.size());
   }
   std::size_t next_registered = 0;
   for (const auto& [begin, end] : sessions) {

@@ -2,7 +2,8 @@
 // a LiDAR SLAM system and for multi-session mapping). One verb per stage:
 //   read      a scan list (SCANS.tsv or the KITTI odometry layout),
 //   model     every scan once (model_scene), keeping only its SceneModel,
-//   odometry  given, or registered scan to scan when a session has none,
+//   odometry  given, or registered scan to scan when a session has none (ICP from the previous
+//             motion verified by the registration's checks, else global registration),
 //   candidates within a session by radius search around the odometry position (LIO-SAM), the radius
 //             growing with the distance travelled since the last accepted loop; across sessions by
 //             a rotation-invariant bird's-eye ring descriptor of each scan,

@@ -157,7 +157,8 @@ struct DriftedWalk {
   std::vector<PoseRow> truth;
 };
 
-DriftedWalk drifted_balm(const fs::path& folder, unsigned seed, std::size_t first, std::size_t count, double yaw_bias_degrees) {
+DriftedWalk drifted_balm(const fs::path& folder, unsigned seed, std::size_t first, std::size_t count, double yaw_bias_degrees,
+                         bool with_odometry = true) {
   const std::string root = testing::shared_data_path("balm_sequence");
   std::ifstream poses(root + "/poses.txt");
   std::vector<std::pair<std::string, Eigen::Isometry3d>> walk;
@@ -192,8 +193,9 @@ DriftedWalk drifted_balm(const fs::path& folder, unsigned seed, std::size_t firs
       odometry = odometry * step * error;
     }
     list << "walk\t" << root << "/" << walk[index].first << "\t";
-    for (int k = 0; k < 12; ++k) list << (k ? " " : "") << odometry.matrix()(k / 4, k % 4);
-    list << "\n";
+    for (int k = 0; k < 12; ++k)
+      if (with_odometry) list << (k ? " " : "") << odometry.matrix()(k / 4, k % 4);
+    list << (with_odometry ? "\n" : "-\n");
     result.truth.push_back({"walk", root + "/" + walk[index].first, walk[index].second, ""});
   }
   write(folder / "scans.tsv", list.str());
@@ -225,6 +227,22 @@ TEST(MappingBalm, DriftedWalkIsClosedWithinFifteenCentimetres) {
   ASSERT_EQ(written.size(), walk.list.scans.size());
   EXPECT_TRUE(written.back().pose.isApprox(result.poses.back(), 1e-6));
   EXPECT_EQ(written.back().frame, "map");
+}
+
+TEST(MappingBalm, WithoutOdometryConsecutiveScansAreRegistered) {
+  QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
+  TemporaryFolder folder;
+  // Ten scans of the walk once it moves (about 2 m apart), with no odometry at all.
+  const DriftedWalk walk = drifted_balm(folder.path, 1, 6, 10, 0.0, false);
+  ASSERT_FALSE(walk.list.scans[1].odometry.has_value());
+  const MapResult result = map_scans(walk.list);
+  std::size_t answered = 0;
+  for (const MapEdge& edge : result.edges)
+    if (edge.kind == MapEdgeKind::Odometry) answered += edge.status == "ok" || edge.status == "ambiguous";
+  EXPECT_EQ(answered, 9u);
+  const MapEvaluation evaluation = evaluate_map(result, walk.truth);
+  std::printf("BALM without odometry, 10 scans: registered odometry ATE %.3f m, map ATE %.3f m\n", evaluation.ate_odometry, evaluation.ate);
+  EXPECT_LE(evaluation.ate_odometry, 0.3);
 }
 
 }  // namespace
