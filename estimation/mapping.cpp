@@ -1,0 +1,519 @@
+// The mapping pipeline (mapping.h): model every scan once, odometry, loop candidates, loop edges from
+// the registration pipeline, the pose graph.
+#include "estimation/mapping.h"
+
+#include "estimation/registration_config.h"
+#include "fitting/scene_modelling.h"
+#include "geometry/error.h"
+#include "geometry/io.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <list>
+#include <mutex>
+#include <numeric>
+
+namespace quadrix {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double elapsed_ms(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
+
+constexpr double kDegrees = 3.14159265358979323846 / 180.0;
+
+/// Rings and sectors of the bird's-eye place descriptor.
+constexpr int kDescriptorRings = 20;
+constexpr int kDescriptorSectors = 60;
+constexpr double kDescriptorRingWidth = 2.0;  // m: 20 rings reach 40 m
+
+/// A rotation-invariant bird's-eye descriptor of a scan (the ring key of Scan Context, Kim and Kim
+/// 2018): the points around the up axis binned into 20 rings of 2 m and 60 sectors; per ring, the
+/// share of occupied sectors and the mean height of their highest point above the scan's lowest
+/// (10 m clamps it). A turn of the sensor permutes sectors within a ring and changes neither.
+Eigen::VectorXd ring_descriptor(const PointCloud& cloud, const Eigen::Vector3d& up) {
+  const Eigen::Vector3d axis = up.normalized();
+  const Eigen::Vector3d east = (std::abs(axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(axis).normalized();
+  const Eigen::Vector3d north = axis.cross(east);
+  std::vector<float> highest(kDescriptorRings * kDescriptorSectors, -1e30f);
+  double lowest = 1e30;
+  for (std::size_t index = 0; index < cloud.size(); ++index) {
+    const Eigen::Vector3d point = cloud.point(index);
+    const double x = point.dot(east), y = point.dot(north), z = point.dot(axis);
+    const double range = std::hypot(x, y);
+    const int ring = static_cast<int>(range / kDescriptorRingWidth);
+    if (ring >= kDescriptorRings || range < 1.0) continue;
+    const double angle = std::atan2(y, x) + 3.14159265358979323846;
+    const int sector = std::min(kDescriptorSectors - 1, static_cast<int>(angle / (2.0 * 3.14159265358979323846) * kDescriptorSectors));
+    float& cell = highest[static_cast<std::size_t>(ring * kDescriptorSectors + sector)];
+    cell = std::max(cell, static_cast<float>(z));
+    lowest = std::min(lowest, z);
+  }
+  Eigen::VectorXd descriptor = Eigen::VectorXd::Zero(2 * kDescriptorRings);
+  for (int ring = 0; ring < kDescriptorRings; ++ring) {
+    int occupied = 0;
+    double height = 0.0;
+    for (int sector = 0; sector < kDescriptorSectors; ++sector) {
+      const float cell = highest[static_cast<std::size_t>(ring * kDescriptorSectors + sector)];
+      if (cell < -1e29f) continue;
+      ++occupied;
+      height += std::min(10.0, static_cast<double>(cell) - lowest);
+    }
+    descriptor(ring) = static_cast<double>(occupied) / kDescriptorSectors;
+    descriptor(kDescriptorRings + ring) = occupied > 0 ? height / occupied / 10.0 : 0.0;
+  }
+  return descriptor;
+}
+
+/// A few clouds kept in memory for verification, least recently used dropped first.
+class CloudCache {
+ public:
+  CloudCache(const ScanList& list, std::size_t capacity) : list_(list), capacity_(std::max<std::size_t>(2, capacity)) {}
+
+  std::shared_ptr<const PointCloud> get(std::size_t scan) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (auto it = entries_.begin(); it != entries_.end(); ++it)
+        if (it->first == scan) {
+          entries_.splice(entries_.begin(), entries_, it);
+          return it->second;
+        }
+    }
+    auto cloud = std::make_shared<const PointCloud>(read_point_cloud(list_.scans[scan].path));
+    std::lock_guard<std::mutex> lock(mutex_);
+    entries_.emplace_front(scan, cloud);
+    while (entries_.size() > capacity_) entries_.pop_back();
+    return cloud;
+  }
+
+ private:
+  const ScanList& list_;
+  std::size_t capacity_;
+  std::mutex mutex_;
+  std::list<std::pair<std::size_t, std::shared_ptr<const PointCloud>>> entries_;
+};
+
+/// What modelling keeps of one scan.
+struct ScanModel {
+  SceneModel model;                 ///< as model_scene built it
+  std::optional<SceneModel> augmented;  ///< the same with augmented points, when model_scene gave none (augment_other_side's copy, made once)
+  RegistrationOptions options;      ///< its preset's options (auto: resolved on this scan); source_extraction is what it was modelled with
+  Eigen::VectorXd descriptor;       ///< ring_descriptor
+  std::string preset;               ///< preset name or the auto choice's reasons
+  double modelling_ms = 0.0;        ///< model_scene time
+};
+
+Information6d diagonal_information(double rotation_sigma, double translation_sigma) {
+  Information6d information = Information6d::Zero();
+  information.diagonal().head<3>().setConstant(1.0 / (rotation_sigma * rotation_sigma));
+  information.diagonal().tail<3>().setConstant(1.0 / (translation_sigma * translation_sigma));
+  return information;
+}
+
+/// The information of an odometry step of length `distance`: sigmas grow with the distance travelled.
+Information6d odometry_information(double distance, const MapOptions& options) {
+  const double translation = std::max(options.odometry_translation_floor, options.odometry_translation_drift * distance);
+  const double rotation =
+      std::max(options.odometry_rotation_floor_degrees, options.odometry_rotation_drift_degrees * distance) * kDegrees;
+  return diagonal_information(rotation, translation);
+}
+
+double median_range(const PointCloud& cloud) {
+  std::vector<float> ranges(cloud.size());
+  for (std::size_t index = 0; index < cloud.size(); ++index) ranges[index] = cloud.positions.col(static_cast<Eigen::Index>(index)).norm();
+  const auto middle = ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2);
+  std::nth_element(ranges.begin(), middle, ranges.end());
+  return *middle;
+}
+
+/// Models every scan once, in parallel; errors name the row.
+std::vector<ScanModel> model_scans(const ScanList& list, const MapOptions& options, const MapProgress& progress) {
+  std::vector<ScanModel> models(list.scans.size());
+  std::mutex mutex;
+  std::size_t done = 0;
+  std::string first_error;
+  std::size_t first_error_scan = list.scans.size();
+  tbb::parallel_for(std::size_t{0}, list.scans.size(), [&](std::size_t index) {
+    const ScanEntry& entry = list.scans[index];
+    const std::string where = list.source + ": row " + std::to_string(entry.row) + " (" + entry.scan + "): ";
+    try {
+      PointCloud cloud;
+      try {
+        cloud = read_point_cloud(entry.path);
+      } catch (const Error& error) {
+        throw Error(where + error.what());
+      }
+      if (cloud.size() < 100) throw Error(where + "the scan holds " + std::to_string(cloud.size()) + " points; at least 100 are needed");
+      const double range = median_range(cloud);
+      if (range > options.maximum_median_range)
+        throw Error(where + "the median point lies " + std::to_string(static_cast<long long>(range)) +
+                    " m from the sensor (more than " + std::to_string(static_cast<long long>(options.maximum_median_range)) +
+                    " m): expected metres; is the scan in millimetres?");
+      ScanModel& scan = models[index];
+      RegistrationOptions resolved;
+      if (options.registration_options) {
+        resolved = *options.registration_options;
+        scan.preset = "fixed options";
+      } else {
+        std::string notes;
+        resolved = resolve_registration_side(options.preset, cloud, "scan", &notes);
+        scan.preset = notes.empty() ? options.preset : notes;
+      }
+      scan.options = resolved;
+      const Clock::time_point start = Clock::now();
+      ModellingResult modelling = model_scene(cloud, resolved.source_extraction, resolved.modelling);
+      if (modelling.model.augmented_count() == 0 && resolved.correspondences.match_augmented_points) {
+        ModellingResult augmented = modelling;
+        augment_scene_model(cloud.positions.cast<double>(), augmented, resolved.modelling);
+        if (augmented.model.augmented_count() > 0) scan.augmented = std::move(augmented.model);
+      }
+      scan.modelling_ms = elapsed_ms(start);
+      scan.model = std::move(modelling.model);
+      scan.descriptor = ring_descriptor(cloud, resolved.source_extraction.up);
+    } catch (const Error& error) {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (index < first_error_scan) {
+        first_error_scan = index;
+        first_error = error.what();
+      }
+      return;
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    ++done;
+    if (progress) progress("scans modelled", done, list.scans.size());
+  });
+  if (first_error_scan < list.scans.size()) throw Error(first_error);
+  return models;
+}
+
+/// Registration of one pair from the cached models, verified on the clouds.
+MapEdge register_pair(std::size_t from, std::size_t to, MapEdgeKind kind, const std::vector<ScanModel>& models,
+                      CloudCache& clouds, const MapOptions& options) {
+  const Clock::time_point start = Clock::now();
+  // The source's options with the target's extraction, as `quadrix register` resolves a pair.
+  RegistrationOptions registration = models[from].options;
+  registration.target_extraction = models[to].options.source_extraction;
+  const SceneModel* source = &models[from].model;
+  const SceneModel* target = &models[to].model;
+  if (registration.correspondences.match_augmented_points) {
+    if (lacks_augmentation_of(*source, *target) && models[from].augmented) source = &*models[from].augmented;
+    else if (lacks_augmentation_of(*target, *source) && models[to].augmented) target = &*models[to].augmented;
+  }
+  RegistrationResult result = register_models(*source, *target, registration);
+  {
+    const std::shared_ptr<const PointCloud> source_cloud = clouds.get(from);
+    const std::shared_ptr<const PointCloud> target_cloud = clouds.get(to);
+    verify_registration(result, *source_cloud, *target_cloud, registration);
+  }
+  MapEdge edge;
+  edge.from = from;
+  edge.to = to;
+  edge.kind = kind;
+  edge.status = registration_status_name(result.status);
+  edge.transform = result.transform;
+  edge.overlap = result.overlap ? result.overlap->transformed : 0.0;
+  edge.information = diagonal_information(options.loop_rotation_sigma_degrees * kDegrees, options.loop_translation_sigma);
+  edge.note = result.status == RegistrationStatus::Ok ? "" : result.message;
+  edge.registration_ms = elapsed_ms(start);
+  return edge;
+}
+
+/// Odometry of scan `from` onto the previous scan `to`: point-to-plane ICP from `guess` (the previous
+/// motion) verified by the registration's checks (RegistrationOptions::local_only); when that is not
+/// `ok`, global registration from the models (register_pair).
+MapEdge register_consecutive(std::size_t from, std::size_t to, const Eigen::Isometry3d& guess, const std::vector<ScanModel>& models,
+                             CloudCache& clouds, const MapOptions& options) {
+  const Clock::time_point start = Clock::now();
+  RegistrationOptions registration = models[from].options;
+  registration.target_extraction = models[to].options.source_extraction;
+  registration.initial_guess = guess;
+  registration.local_only = true;
+  ModellingResult source_modelling, target_modelling;  // the cached models; the checks crop the clouds themselves
+  source_modelling.model = models[from].model;
+  target_modelling.model = models[to].model;
+  RegistrationResult result;
+  {
+    const std::shared_ptr<const PointCloud> source_cloud = clouds.get(from);
+    const std::shared_ptr<const PointCloud> target_cloud = clouds.get(to);
+    result = register_modelled_clouds({source_cloud.get(), &source_modelling, 0.0, false},
+                                      {target_cloud.get(), &target_modelling, 0.0, false}, registration);
+  }
+  if (result.status != RegistrationStatus::Ok) {
+    MapEdge edge = register_pair(from, to, MapEdgeKind::Odometry, models, clouds, options);
+    edge.note = "local alignment " + std::string(registration_status_name(result.status)) + ", global registration used" +
+                (edge.note.empty() ? "" : "; " + edge.note);
+    edge.registration_ms = elapsed_ms(start);
+    return edge;
+  }
+  MapEdge edge;
+  edge.from = from;
+  edge.to = to;
+  edge.kind = MapEdgeKind::Odometry;
+  edge.status = registration_status_name(result.status);
+  edge.transform = result.transform;
+  edge.overlap = result.overlap ? result.overlap->transformed : 0.0;
+  edge.note = "local alignment from the previous motion";
+  edge.registration_ms = elapsed_ms(start);
+  return edge;
+}
+
+/// Distance travelled along a session's odometry from scan `first` to scan `last` (indices into poses).
+std::vector<double> path_lengths(const std::vector<Eigen::Isometry3d>& poses, std::size_t begin, std::size_t end) {
+  std::vector<double> length(end - begin, 0.0);
+  for (std::size_t index = begin + 1; index < end; ++index)
+    length[index - begin] = length[index - begin - 1] + (poses[index].translation() - poses[index - 1].translation()).norm();
+  return length;
+}
+
+}  // namespace
+
+MapResult map_scans(const ScanList& input, const MapOptions& options, const MapProgress& progress) {
+  const Clock::time_point run_start = Clock::now();
+  MapResult result;
+  result.list = input;
+  const ScanList& list = result.list;
+  const std::size_t count = list.scans.size();
+  if (count == 0) throw Error(list.source + ": no scans listed");
+
+  // Model every scan once (paper §"Quadric-based Scene Representation"); only the models stay in memory.
+  Clock::time_point stage = Clock::now();
+  const std::vector<ScanModel> models = model_scans(list, options, progress);
+  result.timings_ms["modelling"] = elapsed_ms(stage);
+  for (const ScanModel& model : models) {
+    result.models.push_back(model.model);
+    result.presets.push_back(model.preset);
+  }
+  CloudCache clouds(list, options.cloud_cache);
+
+  // Sessions as index ranges.
+  std::vector<std::pair<std::size_t, std::size_t>> sessions;
+  for (std::size_t index = 0; index < count; ++index)
+    if (index == 0 || list.scans[index].session != list.scans[index - 1].session) sessions.emplace_back(index, index + 1);
+    else sessions.back().second = index + 1;
+  std::vector<std::size_t> session_of(count);
+  for (std::size_t session = 0; session < sessions.size(); ++session)
+    for (std::size_t index = sessions[session].first; index < sessions[session].second; ++index) session_of[index] = session;
+
+  // Odometry: given, or each scan registered onto the previous one.
+  stage = Clock::now();
+  result.odometry.assign(count, Eigen::Isometry3d::Identity());
+  std::vector<MapEdge> odometry_edges;
+  std::vector<std::pair<std::size_t, std::size_t>> consecutive;
+  for (const auto& [begin, end] : sessions)
+    for (std::size_t index = begin + 1; index < end; ++index) {
+      if (list.scans[index].odometry) continue;
+      consecutive.emplace_back(index, index - 1);
+    }
+  if (!consecutive.empty() && !options.register_consecutive)
+    throw Error(list.source + ": session '" + list.scans[consecutive.front().first].session +
+                "' has no odometry and registering consecutive scans is off");
+  // In time order: each step starts from the previous one's motion (identity for the first).
+  std::vector<MapEdge> registered(consecutive.size());
+  for (std::size_t pair = 0; pair < consecutive.size(); ++pair) {
+    const bool continues = pair > 0 && consecutive[pair - 1].first + 1 == consecutive[pair].first &&
+                           session_of[consecutive[pair - 1].first] == session_of[consecutive[pair].first];
+    const bool answered = continues && (registered[pair - 1].status == "ok" || registered[pair - 1].status == "ambiguous");
+    const Eigen::Isometry3d guess = answered ? registered[pair - 1].transform : Eigen::Isometry3d::Identity();
+    registered[pair] = register_consecutive(consecutive[pair].first, consecutive[pair].second, guess, models, clouds, options);
+    if (progress) progress("consecutive scans registered", pair + 1, consecutive.size());
+  }
+  std::size_t next_registered = 0;
+  for (const auto& [begin, end] : sessions) {
+    for (std::size_t index = begin; index < end; ++index) {
+      if (list.scans[index].odometry) {
+        result.odometry[index] = *list.scans[index].odometry;
+        if (index == begin) continue;
+        MapEdge edge;
+        edge.from = index;
+        edge.to = index - 1;
+        edge.kind = MapEdgeKind::Odometry;
+        edge.status = "given";
+        edge.transform = result.odometry[index - 1].inverse() * result.odometry[index];
+        odometry_edges.push_back(edge);
+        continue;
+      }
+      if (index == begin) continue;  // the first scan of a session without odometry defines its frame
+      MapEdge edge = registered[next_registered++];
+      if (edge.status != "ok" && edge.status != "ambiguous") {
+        // No answer: keep the previous motion (constant velocity), and say so.
+        const Eigen::Isometry3d previous =
+            index >= begin + 2 ? result.odometry[index - 1].inverse() * result.odometry[index - 2] : Eigen::Isometry3d::Identity();
+        edge.transform = previous;
+        edge.note = "registration " + edge.status + ": previous motion kept; " + edge.note;
+      }
+      result.odometry[index] = result.odometry[index - 1] * edge.transform.inverse();
+      odometry_edges.push_back(edge);
+    }
+  }
+  for (MapEdge& edge : odometry_edges) {
+    const double distance = edge.transform.translation().norm();
+    edge.information = odometry_information(distance, options);
+    if (edge.status != "ok" && edge.status != "given") edge.information *= 0.01;  // a guessed or unsure step is 10x less certain
+    edge.used = true;
+  }
+  result.timings_ms["odometry"] = elapsed_ms(stage);
+
+  // Loop candidates within each session: LIO-SAM's radius search around the odometry position, the
+  // radius growing with the distance travelled since the last accepted loop; positions re-anchored
+  // at each accepted loop (the loop's pose of the current scan replaces the drifted one).
+  std::vector<MapEdge> loop_edges;
+  double candidates_ms = 0.0, registration_ms = 0.0;
+  std::size_t registered_count = 0;
+  const Clock::time_point loops_start = Clock::now();
+  for (const auto& [begin, end] : sessions) {
+    const std::vector<double> travelled = path_lengths(result.odometry, begin, end);
+    Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
+    std::vector<Eigen::Isometry3d> anchored(end - begin);
+    double last_loop_at = 0.0;
+    for (std::size_t index = begin; index < end; ++index) {
+      const Clock::time_point candidates_start = Clock::now();
+      anchored[index - begin] = correction * result.odometry[index];
+      const double radius = std::min(options.maximum_loop_radius,
+                                     options.loop_radius + options.loop_radius_growth * (travelled[index - begin] - last_loop_at));
+      std::vector<std::pair<double, std::size_t>> near;
+      for (std::size_t other = begin; other < index; ++other) {
+        if (travelled[index - begin] - travelled[other - begin] < options.minimum_loop_travel) continue;
+        const double distance = (anchored[other - begin].translation() - anchored[index - begin].translation()).norm();
+        if (distance <= radius) near.emplace_back(distance, other);
+      }
+      std::sort(near.begin(), near.end());
+      std::vector<std::size_t> chosen;
+      for (const auto& [distance, other] : near) {
+        if (chosen.size() >= options.candidates_per_scan) break;
+        bool spaced = true;
+        for (std::size_t kept : chosen)
+          if (std::abs(travelled[kept - begin] - travelled[other - begin]) < options.minimum_candidate_spacing) spaced = false;
+        if (spaced) chosen.push_back(other);
+      }
+      candidates_ms += elapsed_ms(candidates_start);
+      if (chosen.empty()) continue;
+      result.candidates_within += chosen.size();
+      const Clock::time_point registration_start = Clock::now();
+      std::vector<MapEdge> found(chosen.size());
+      tbb::parallel_for(std::size_t{0}, chosen.size(),
+                        [&](std::size_t k) { found[k] = register_pair(index, chosen[k], MapEdgeKind::Loop, models, clouds, options); });
+      registration_ms += elapsed_ms(registration_start);
+      registered_count += found.size();
+      if (progress) progress("loop candidates registered", registered_count, 0);
+      const MapEdge* best = nullptr;
+      for (const MapEdge& edge : found)
+        if (edge.status == "ok" && (best == nullptr || edge.overlap > best->overlap)) best = &edge;
+      if (best != nullptr) {
+        // The scan's pose as the loop says: T_index = T_other * Z^-1 ... Z maps index into other's frame.
+        const Eigen::Isometry3d closed = anchored[best->to - begin] * best->transform;
+        correction = closed * result.odometry[index].inverse();
+        anchored[index - begin] = closed;
+        last_loop_at = travelled[index - begin];
+      }
+      for (MapEdge& edge : found) loop_edges.push_back(std::move(edge));
+    }
+  }
+
+  // Across sessions: rank the scans of earlier sessions by descriptor distance, register the best few.
+  if (sessions.size() > 1) {
+    const Clock::time_point candidates_start = Clock::now();
+    std::vector<std::pair<std::size_t, std::size_t>> pairs;
+    result.place_ranking.assign(count, {});
+    for (std::size_t session = 1; session < sessions.size(); ++session)
+      for (std::size_t index = sessions[session].first; index < sessions[session].second; index += std::max<std::size_t>(1, options.place_query_stride)) {
+        std::vector<std::pair<double, std::size_t>> ranked;
+        for (std::size_t other = 0; other < sessions[session].first; ++other)
+          ranked.emplace_back((models[index].descriptor - models[other].descriptor).norm(), other);
+        const std::size_t keep = std::min(options.place_candidates_per_scan, ranked.size());
+        std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(keep), ranked.end());
+        for (std::size_t k = 0; k < keep; ++k) {
+          result.place_ranking[index].push_back(ranked[k].second);
+          pairs.emplace_back(index, ranked[k].second);
+        }
+      }
+    result.candidates_across = pairs.size();
+    candidates_ms += elapsed_ms(candidates_start);
+    const Clock::time_point registration_start = Clock::now();
+    std::vector<MapEdge> found(pairs.size());
+    std::mutex mutex;
+    std::size_t done = 0;
+    tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t pair) {
+      found[pair] = register_pair(pairs[pair].first, pairs[pair].second, MapEdgeKind::Loop, models, clouds, options);
+      found[pair].across_sessions = true;
+      std::lock_guard<std::mutex> lock(mutex);
+      if (progress) progress("place candidates registered", ++done, pairs.size());
+    });
+    registration_ms += elapsed_ms(registration_start);
+    for (MapEdge& edge : found) loop_edges.push_back(std::move(edge));
+  }
+  result.timings_ms["candidates"] = candidates_ms;
+  result.timings_ms["registration"] = registration_ms;
+  result.timings_ms["loops"] = elapsed_ms(loops_start);
+
+  // The pose graph.
+  stage = Clock::now();
+  for (MapEdge& edge : loop_edges) {
+    edge.used = edge.status == "ok" || (options.use_ambiguous_edges && edge.status == "ambiguous");
+    if (!edge.used && edge.note.empty()) edge.note = "not in the graph (" + edge.status + ")";
+  }
+  result.edges = odometry_edges;
+  result.edges.insert(result.edges.end(), loop_edges.begin(), loop_edges.end());
+
+  // Initial poses: the first session's odometry; each later session placed through the used edge to
+  // an already placed session that most other such edges agree with (2 m / 5 deg), else left in its frame.
+  result.initial = result.odometry;
+  std::vector<bool> placed(sessions.size(), false);
+  placed[0] = true;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t session = 1; session < sessions.size(); ++session) {
+      if (placed[session]) continue;
+      std::vector<Eigen::Isometry3d> proposals;  // the session's frame in the map, one per edge
+      for (const MapEdge& edge : result.edges) {
+        if (!edge.used || edge.kind != MapEdgeKind::Loop) continue;
+        std::size_t mine = edge.from, theirs = edge.to;
+        Eigen::Isometry3d mine_in_theirs = edge.transform;
+        if (session_of[mine] != session) {
+          std::swap(mine, theirs);
+          mine_in_theirs = mine_in_theirs.inverse();
+        }
+        if (session_of[mine] != session || !placed[session_of[theirs]]) continue;
+        proposals.push_back(result.initial[theirs] * mine_in_theirs * result.odometry[mine].inverse());
+      }
+      if (proposals.empty()) continue;
+      std::size_t best = 0, best_support = 0;
+      for (std::size_t a = 0; a < proposals.size(); ++a) {
+        std::size_t support = 0;
+        for (const Eigen::Isometry3d& other : proposals)
+          if (registration_succeeded(proposals[a], other)) ++support;
+        if (support > best_support) best = a, best_support = support;
+      }
+      for (std::size_t index = sessions[session].first; index < sessions[session].second; ++index)
+        result.initial[index] = proposals[best] * result.odometry[index];
+      placed[session] = changed = true;
+    }
+  }
+
+  std::vector<PoseGraphEdge> graph_edges;
+  std::vector<std::size_t> graph_edge_of;
+  for (std::size_t index = 0; index < result.edges.size(); ++index) {
+    const MapEdge& edge = result.edges[index];
+    if (!edge.used) continue;
+    const bool loop = edge.kind == MapEdgeKind::Loop;
+    graph_edges.push_back({edge.from, edge.to, edge.transform, edge.information, loop && edge.status == "ok", loop && edge.status != "ok"});
+    graph_edge_of.push_back(index);
+  }
+  result.poses = result.initial;
+  result.graph = optimise_pose_graph(result.poses, graph_edges, options.graph);
+  for (std::size_t k = 0; k < graph_edges.size(); ++k) {
+    MapEdge& edge = result.edges[graph_edge_of[k]];
+    edge.chi2_before = result.graph.initial_chi2[k];
+    edge.chi2_after = result.graph.final_chi2[k];
+    edge.dcs_scale = result.graph.final_scale[k];
+  }
+  result.in_map_frame.assign(count, false);
+  for (std::size_t index = 0; index < count; ++index) result.in_map_frame[index] = result.graph.component[index] == result.graph.component[0];
+  result.timings_ms["graph"] = elapsed_ms(stage);
+  result.timings_ms["total"] = elapsed_ms(run_start);
+  return result;
+}
+
+}  // namespace quadrix

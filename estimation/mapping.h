@@ -1,0 +1,199 @@
+// Maps from many scans (paper §"Real-World Applications": QuadricsReg as the loop-closure module of
+// a LiDAR SLAM system and for multi-session mapping). One verb per stage:
+//   read      a scan list (SCANS.tsv or the KITTI odometry layout),
+//   model     every scan once (model_scene), keeping only its SceneModel,
+//   odometry  given, or registered scan to scan when a session has none (ICP from the previous
+//             motion verified by the registration's checks, else global registration),
+//   candidates within a session by radius search around the odometry position (LIO-SAM), the radius
+//             growing with the distance travelled since the last accepted loop; across sessions by
+//             a rotation-invariant bird's-eye ring descriptor of each scan,
+//   register  candidate pairs from their cached models (register_models), verified on the clouds
+//             loaded on demand (verify_registration),
+//   optimise  the pose graph (optimise_pose_graph; loop edges under DCS),
+//   write     poses.tsv, edges.csv, report.json, map.ply and the merged quadric model.
+#pragma once
+
+#include "estimation/pose_graph.h"
+#include "estimation/registration.h"
+#include "fitting/scene_model.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace quadrix {
+
+/// One scan of a scan list.
+struct ScanEntry {
+  std::string session;                         ///< session name (scans of one session share an odometry frame)
+  std::string scan;                            ///< the cloud file as written in the list
+  std::string path;                            ///< the cloud file resolved against the list's folder
+  std::size_t row = 0;                         ///< 1-based line of the list (or frame index of a KITTI layout)
+  std::optional<Eigen::Isometry3d> odometry;   ///< sensor pose in the session's odometry frame (p_odom = R p_scan + t), when given
+};
+
+/// A scan list: scans grouped by session, each session's scans in time order.
+struct ScanList {
+  std::string source;                          ///< the list file (or KITTI folder), for messages
+  std::vector<ScanEntry> scans;                ///< every scan, sessions contiguous, in list order
+  std::vector<std::string> sessions;           ///< session names in order of first appearance
+};
+
+/// Reads SCANS.tsv: a header naming the tab-separated columns `session`, `scan` and `odometry` (any
+/// order, other columns ignored), then one row per scan; `odometry` is 12 numbers separated by
+/// spaces (row-major 3x4) or `-`. Throws quadrix::Error naming the file and the row for a missing
+/// column or file, a malformed or non-rigid pose, a session mixing given and missing odometry, a
+/// session split over non-adjacent rows, a session with one scan, or a duplicated row.
+ScanList read_scan_list(const std::string& path);
+
+/// The KITTI odometry layout: `velodyne_folder/*.bin` in name order, one session named `session`,
+/// with the poses file's lines (12 numbers each, one per frame, camera frame) turned into LiDAR poses
+/// Tr^-1 P Tr when `calibration` (a KITTI calib file) is given, else taken as they are; `poses`
+/// empty: no odometry. Frames beyond the poses file are an Error naming it.
+ScanList read_kitti_scan_list(const std::string& velodyne_folder, const std::string& poses = "",
+                              const std::string& calibration = "", const std::string& session = "kitti");
+
+/// A table of poses (poses.tsv): header, then `session`, `scan` and the 12 numbers of the pose
+/// (one column of 12 space-separated numbers, or 12 columns), further columns ignored.
+struct PoseRow {
+  std::string session;                                     ///< session name
+  std::string scan;                                        ///< scan as in the scan list
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< sensor pose
+  std::string frame;                                       ///< the `frame` column when present ("map" or "own")
+};
+
+/// Reads a poses.tsv; throws quadrix::Error naming the file and row.
+std::vector<PoseRow> read_pose_table(const std::string& path);
+
+/// Options of the whole mapping run.
+struct MapOptions {
+  std::string preset = "auto";                 ///< registration preset of every scan (registration_preset name, or auto per scan)
+  double maximum_median_range = 1000.0;        ///< a scan whose median point lies farther from its sensor is in another unit (millimetres), m: Error
+  // Loop candidates within a session (LIO-SAM's radius search).
+  double loop_radius = 15.0;                   ///< search radius around the odometry position right after a loop, m (LIO-SAM's 15; on the BALM walk with drift, 8 m closed 11-13 of 28 true revisits, 15 m 23 of 28, none wrong: docs/mapping.md)
+  double loop_radius_growth = 0.05;            ///< the radius grows by this many metres per metre travelled since the last accepted loop (odometry drift)
+  double maximum_loop_radius = 30.0;           ///< the radius never exceeds this, m
+  double minimum_loop_travel = 15.0;           ///< a candidate lies at least this far back along the path, m (LIO-SAM: 30 s)
+  std::size_t candidates_per_scan = 2;         ///< the nearest this many candidates of each scan are registered
+  double minimum_candidate_spacing = 3.0;      ///< candidates of one scan lie at least this far apart along the path, m
+  // Across sessions.
+  std::size_t place_candidates_per_scan = 3;   ///< the best-ranked this many scans of other sessions are registered with each scan
+  std::size_t place_query_stride = 1;          ///< query every this many scans of a session across sessions
+  // Odometry when none is given.
+  bool register_consecutive = true;            ///< sessions without odometry are registered scan to scan
+  // Loop edges into the graph.
+  bool use_ambiguous_edges = true;             ///< ambiguous loop edges enter the graph as switchable edges under DCS (else only `ok` ones): on the BALM walk's validation seeds the RPE fell from 0.67 to 0.57 % and 0.52 to 0.47 % (docs/mapping.md)
+  double loop_translation_sigma = 0.1;         ///< standard deviation of a loop edge's translation, m (when the registration gives no information)
+  double loop_rotation_sigma_degrees = 0.5;    ///< standard deviation of its rotation, degrees
+  // Odometry drift (the information of odometry edges).
+  double odometry_translation_drift = 0.05;    ///< odometry's translation error per metre travelled (5%)
+  double odometry_rotation_drift_degrees = 1.0;///< odometry's rotation error per metre travelled, degrees
+  double odometry_translation_floor = 0.05;    ///< a step's translation sigma is at least this, m (scans standing still)
+  double odometry_rotation_floor_degrees = 0.5;///< a step's rotation sigma is at least this, degrees
+  PoseGraphOptions graph;                      ///< DCS Φ and the solver
+  double map_voxel = 0.2;                      ///< map.ply keeps one point per cube of this edge, m
+  std::size_t cloud_cache = 6;                 ///< clouds kept in memory for verification at once
+  std::optional<RegistrationOptions> registration_options;  ///< fixed options (both extractions included) for every scan and pair instead of resolving `preset` per scan
+};
+
+/// Kind of an edge.
+enum class MapEdgeKind { Odometry, Loop };
+
+/// One edge of the map: a relative pose between two scans.
+struct MapEdge {
+  std::size_t from = 0;                        ///< scan index (into ScanList::scans), source
+  std::size_t to = 0;                          ///< scan index, target
+  MapEdgeKind kind = MapEdgeKind::Odometry;    ///< odometry (consecutive scans) or loop
+  std::string status = "ok";                   ///< "given" (odometry from the list), or the registration status
+  bool used = false;                           ///< entered the pose graph
+  bool across_sessions = false;                ///< joins two sessions
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< maps `from` points into the `to` frame
+  Information6d information = Information6d::Identity();       ///< rotation then translation
+  double overlap = 0.0;                        ///< dense overlap of the registration (0 for given odometry)
+  double registration_ms = 0.0;                ///< time of the registration
+  double chi2_before = 0.0;                    ///< χ² at the odometry poses (used edges)
+  double chi2_after = 0.0;                     ///< χ² at the optimised poses (used edges)
+  double dcs_scale = 1.0;                      ///< DCS scale after optimisation (used loop edges)
+  std::string note;                            ///< why not used, or the registration's message
+};
+
+/// Everything map_scans returns.
+struct MapResult {
+  ScanList list;                               ///< the input
+  std::vector<Eigen::Isometry3d> odometry;     ///< each scan's pose in its session's odometry frame (given or registered)
+  std::vector<Eigen::Isometry3d> initial;      ///< each scan's pose before optimisation (odometry; later sessions placed by their first used edge)
+  std::vector<Eigen::Isometry3d> poses;        ///< each scan's optimised pose: map frame, or its session's own frame when not joined
+  std::vector<bool> in_map_frame;              ///< the scan's session is joined to the first session
+  std::vector<MapEdge> edges;                  ///< odometry edges, then loop edges
+  std::vector<SceneModel> models;              ///< each scan's model (sensor frame)
+  std::vector<std::string> presets;            ///< the preset each scan was modelled with
+  PoseGraphSummary graph;                      ///< the optimisation
+  std::map<std::string, double> timings_ms;    ///< "loading_and_modelling", "odometry", "candidates", "registration", "graph", "total"
+  std::size_t candidates_within = 0;           ///< candidate pairs within sessions
+  std::size_t candidates_across = 0;           ///< candidate pairs across sessions
+  std::vector<std::vector<std::size_t>> place_ranking;  ///< per scan, the scans of other sessions ranked by descriptor (best first, top place_candidates_per_scan)
+};
+
+/// Progress callback: stage name, done, total.
+using MapProgress = std::function<void(const std::string& stage, std::size_t done, std::size_t total)>;
+
+/// Builds the map of `list` (every stage of the file comment). Throws quadrix::Error naming the row
+/// for an unreadable scan, an empty one or one in another unit.
+MapResult map_scans(const ScanList& list, const MapOptions& options = {}, const MapProgress& progress = {});
+
+/// Writes the outputs of `result` into `folder` atomically: they are written into a fresh sibling
+/// folder which then replaces `folder` (an existing `folder` is replaced only once everything is
+/// written). `evaluation_json`, when not empty, is stored as the "evaluation" member of report.json.
+void write_map(const std::string& folder, const MapResult& result, const MapOptions& options,
+               const std::string& evaluation_json = "");
+
+/// Metrics of a map against true poses.
+struct MapEvaluation {
+  double ate = 0.0;                    ///< RMSE of positions after one SE(3) Umeyama alignment (no scale), m
+  double ate_odometry = 0.0;           ///< the same for the initial poses (odometry only)
+  double rpe_translation_percent = 0.0;///< KITTI metric: mean translational error over 100..800 m sub-sequences, %
+  double rpe_rotation_deg_per_100m = 0.0; ///< mean rotational error, deg/100 m
+  double rpe_odometry_translation_percent = 0.0;  ///< the same for the odometry
+  double rpe_odometry_rotation_deg_per_100m = 0.0;///< the same for the odometry
+  std::size_t rpe_segments = 0;        ///< sub-sequences the RPE averaged
+  std::string rpe_lengths = "100..800 m";  ///< the sub-sequence lengths: KITTI's, or 10..80 m when the path is shorter than 100 m
+  std::size_t used_loop_edges = 0;     ///< loop edges in the graph
+  std::size_t wrong_used_loop_edges = 0;  ///< of those, more than 2 m or 5 deg from the truth
+  std::size_t ok_loop_edges = 0;       ///< loop edges registered ok
+  std::size_t wrong_ok_loop_edges = 0; ///< of those, wrong
+  double precision = 1.0;              ///< 1 - wrong/used (1 with no used edge)
+  std::size_t true_revisits = 0;       ///< scans with a true revisit: an earlier scan within 30 m and at least minimum_loop_travel back (or in another session)
+  std::size_t closed_revisits = 0;     ///< of those, joined to some earlier scan by an ok loop edge
+  double recall = 0.0;                 ///< closed / true revisits
+  std::size_t place_queries = 0;       ///< scans with a true revisit in another session within 10 m
+  std::size_t place_hits = 0;          ///< of those, with such a scan among their ranked candidates
+  std::vector<std::size_t> wrong_edges;///< indices into MapResult::edges of wrong used loop edges
+  std::string scope;                   ///< "map" (every scan joined) or which sessions were compared
+};
+
+/// Evaluates `result` against `truth` (matched by session and scan; every scan must have a truth
+/// row, else Error naming it). ATE and RPE are computed over the scans in the map frame.
+MapEvaluation evaluate_map(const MapResult& result, const std::vector<PoseRow>& truth, double revisit_radius = 30.0,
+                           double minimum_loop_travel = 15.0);
+
+/// The evaluation as a JSON object.
+std::string map_evaluation_json(const MapEvaluation& evaluation);
+
+/// The rigid transform (no scale) that best maps `from` onto `to` in least squares (Umeyama 1991).
+Eigen::Isometry3d umeyama_alignment(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to);
+
+/// KITTI's relative error (Geiger et al. 2012): mean over sub-sequences starting at every pose, of
+/// the `lengths` along the true path (KITTI: 100, 200, ..., 800 m), of translation error / length
+/// (%) and rotation error / length (deg/100 m). Returns {percent, deg per 100 m, segments}.
+std::tuple<double, double, std::size_t> kitti_relative_error(const std::vector<Eigen::Isometry3d>& estimate,
+                                                             const std::vector<Eigen::Isometry3d>& truth,
+                                                             const std::vector<double>& lengths = {100, 200, 300, 400, 500, 600, 700, 800});
+
+}  // namespace quadrix

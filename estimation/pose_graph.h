@@ -1,0 +1,79 @@
+// A pose graph over SE(3) (paper §"Real-World Applications": the registration becomes a pose-graph
+// constraint and the graph is optimised): one pose per scan, relative-pose edges with a 6x6
+// information matrix, one fixed gauge pose per connected component. Solved with Ceres
+// (Levenberg-Marquardt, quaternion manifold) in up to two stages. First, odometry edges plain and
+// loop edges under the convex Huber kernel, which pulls a drifted trajectory onto its loops however
+// far it drifted. Then, when there are switchable edges (unsure loops), from there with those under
+// dynamic covariance scaling (DCS, Agarwal et al. 2013, the kernel of the paper's selection step),
+// which scales down an edge that disagrees with the corrected graph. DCS from drifted odometry
+// would scale every loop edge down (χ² is thousands there); on sure loop edges it also scales right
+// ones down once calibrated residuals reach a few units of χ², which cost accuracy on the BALM walk
+// (docs/mapping.md), so sure loop edges stay under Huber throughout.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace quadrix {
+
+/// 6x6 information matrix of a relative pose, rotation (rad) then translation (m).
+using Information6d = Eigen::Matrix<double, 6, 6>;
+
+/// One relative-pose constraint: `measurement` maps the points of pose `from` into the frame of pose
+/// `to` (T_to^-1 T_from), the convention of RegistrationResult::transform (source = from, target = to).
+struct PoseGraphEdge {
+  std::size_t from = 0;                                          ///< index of the source pose
+  std::size_t to = 0;                                            ///< index of the target pose
+  Eigen::Isometry3d measurement = Eigen::Isometry3d::Identity(); ///< T_to^-1 T_from as measured
+  Information6d information = Information6d::Identity();        ///< inverse covariance of the error, rotation then translation, `to` frame
+  bool robust = false;                                           ///< a sure loop edge: under Huber (else plain least squares)
+  bool switchable = false;                                       ///< an unsure loop edge: left out of the first stage, under DCS in the second
+};
+
+/// Options of optimise_pose_graph.
+struct PoseGraphOptions {
+  double dcs_phi = 0.5;             ///< Φ of DCS: a robust edge with squared error χ² is scaled by s = min(1, 2Φ/(Φ+χ²)) (paper's selection kernel, Φ = 0.5)
+  double huber_threshold = 2.0;     ///< the Huber kernel on robust edges is quadratic up to χ² = this², linear in the error beyond
+  int maximum_iterations = 100;     ///< Levenberg-Marquardt iterations
+  double function_tolerance = 1e-10;///< relative cost change at which Ceres stops
+};
+
+/// What optimise_pose_graph did.
+struct PoseGraphSummary {
+  double initial_cost = 0.0;            ///< the first stage's cost 1/2 Σ ρ(χ²) (Huber on robust edges) at the initial poses
+  double final_cost = 0.0;              ///< the same cost at the optimised poses
+  std::vector<double> initial_chi2;     ///< χ² of each edge (in edge order) before optimisation
+  std::vector<double> final_chi2;       ///< χ² of each edge after optimisation
+  std::vector<double> final_scale;      ///< DCS scale s of each switchable edge after (1 for the others)
+  std::vector<std::size_t> component;   ///< connected component of each pose (0 = the one holding pose 0)
+  std::vector<std::size_t> gauges;      ///< the pose held fixed in each component
+  int iterations = 0;                   ///< Ceres iterations
+  bool converged = false;               ///< Ceres reported convergence
+  std::string report;                   ///< Ceres' brief report
+};
+
+/// The pose-graph error of one edge at poses T_from, T_to: e = [2 vec(q(Ê Z^-1)); p(Ê) - p(Z)] with
+/// Ê = T_to^-1 T_from and Z the measurement (rotation then translation, in the `to` frame).
+Eigen::Matrix<double, 6, 1> pose_graph_error(const Eigen::Isometry3d& from_pose, const Eigen::Isometry3d& to_pose,
+                                             const Eigen::Isometry3d& measurement);
+
+/// The DCS scale s = min(1, 2Φ/(Φ+χ²)) of an edge with squared error χ².
+double dcs_scale(double chi2, double phi);
+
+/// Connected components of `pose_count` poses joined by `edges`: component of each pose, numbered in
+/// order of their smallest pose.
+std::vector<std::size_t> pose_graph_components(std::size_t pose_count, const std::vector<PoseGraphEdge>& edges);
+
+/// Optimises `poses` (sensor -> map) in place: minimise 1/2 Σ ρ_e(e_eᵀ Ω_e e_e) over every pose but the
+/// first of each connected component, which stays where it is (the gauge), with ρ the identity for
+/// plain edges, Huber for robust ones and DCS for switchable ones (second stage; file comment).
+/// Costs and χ² are reported at the start and at the end. Throws quadrix::Error for an edge naming a pose
+/// that does not exist or an information matrix that is not symmetric positive semi-definite.
+PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
+                                     const PoseGraphOptions& options = {});
+
+}  // namespace quadrix

@@ -1,0 +1,125 @@
+// `quadrix map SCANS.tsv --out DIR [--gt TRUTH.tsv] [--preset P] [--no-ambiguous-edges]` (or
+// `quadrix map --kitti VELODYNE_FOLDER [--kitti-poses FILE --kitti-calib FILE] --out DIR`): one map
+// from many scans (paper §"Real-World Applications"): every scan modelled once, odometry given or
+// registered scan to scan, loop candidates by radius search within sessions and by a place
+// descriptor across them, loop edges from the registration pipeline, a pose graph. Writes
+// poses.tsv, edges.csv, report.json, map.ply, map_model.qsm and models/ into DIR (all or nothing).
+// With --gt also the ATE, RPE and the loop edges' precision and recall. Exit 2 on bad input.
+#include "experiments/command_line/command_registry.h"
+#include "estimation/mapping.h"
+#include "geometry/error.h"
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <unistd.h>
+
+namespace quadrix::cli {
+namespace {
+
+struct MapCommandOptions {
+  std::string scans;             ///< SCANS.tsv
+  std::string kitti;             ///< a KITTI velodyne folder instead
+  std::string kitti_poses;       ///< its poses file
+  std::string kitti_calibration; ///< its calibration (Tr), to turn camera poses into LiDAR poses
+  std::string out;               ///< output folder
+  std::string truth;             ///< poses.tsv of the true poses
+  std::string scheduler;         ///< a Dask scheduler address (Python only)
+  MapOptions map;                ///< every option of the run
+};
+
+void run(const MapCommandOptions& options) {
+  if (!options.scheduler.empty())
+    throw Error("--scheduler: the command line maps in-process (TBB); distributed runs go through Python's quadrix.map(client=...)");
+  if (options.scans.empty() == options.kitti.empty()) throw Error("give either SCANS.tsv or --kitti VELODYNE_FOLDER");
+  const ScanList list = options.kitti.empty() ? read_scan_list(options.scans)
+                                              : read_kitti_scan_list(options.kitti, options.kitti_poses, options.kitti_calibration);
+  std::vector<PoseRow> truth;
+  if (!options.truth.empty()) truth = read_pose_table(options.truth);
+
+  const bool terminal = isatty(fileno(stderr)) != 0;
+  const auto start = std::chrono::steady_clock::now();
+  std::mutex mutex;
+  MapProgress progress;
+  if (terminal)
+    progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
+      std::lock_guard<std::mutex> lock(mutex);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (total > 0 && done > 0)
+        std::fprintf(stderr, "\r%s: %zu / %zu (%.0f s, about %.0f s left in this stage)   ", stage.c_str(), done, total, seconds,
+                     seconds * (static_cast<double>(total) / done - 1.0));
+      else
+        std::fprintf(stderr, "\r%s: %zu (%.0f s)   ", stage.c_str(), done, seconds);
+      std::fflush(stderr);
+    };
+  const MapResult result = map_scans(list, options.map, progress);
+  if (terminal) std::fprintf(stderr, "\n");
+
+  std::string evaluation_json;
+  std::optional<MapEvaluation> evaluation;
+  if (!truth.empty()) {
+    evaluation = evaluate_map(result, truth, 30.0, options.map.minimum_loop_travel);
+    evaluation_json = map_evaluation_json(*evaluation);
+  }
+  write_map(options.out, result, options.map, evaluation_json);
+
+  std::size_t loops = 0, ok = 0, used = 0, within = 0;
+  for (const MapEdge& edge : result.edges) {
+    if (edge.kind != MapEdgeKind::Loop) continue;
+    ++loops;
+    ok += edge.status == "ok";
+    used += edge.used;
+    within += !edge.across_sessions;
+  }
+  std::size_t alone = 0;
+  for (bool joined : result.in_map_frame) alone += !joined;
+  std::printf("map: %zu scans in %zu sessions, %zu loop candidates registered (%zu within sessions), %zu ok, %zu in the graph\n",
+              list.scans.size(), list.sessions.size(), loops, within, ok, used);
+  std::printf("graph: cost %.4g -> %.4g in %d iterations (%s)\n", result.graph.initial_cost, result.graph.final_cost,
+              result.graph.iterations, result.graph.converged ? "converged" : "not converged");
+  if (alone > 0) std::printf("warning: %zu scans belong to sessions joined to no other: left in their own frames (frame = own)\n", alone);
+  std::printf("time: %.1f s, %.0f ms a scan (modelling %.0f ms, registration %.0f ms, graph %.0f ms in all)\n",
+              result.timings_ms.at("total") / 1000.0, result.timings_ms.at("total") / list.scans.size(),
+              result.timings_ms.at("modelling"), result.timings_ms.at("registration"), result.timings_ms.at("graph"));
+  if (evaluation) {
+    std::printf("ATE %.3f m (odometry alone %.3f m) over %s\n", evaluation->ate, evaluation->ate_odometry, evaluation->scope.c_str());
+    std::printf("RPE %.2f %% and %.2f deg/100 m (odometry %.2f %%, %.2f deg/100 m) over %zu sub-sequences of %s\n",
+                evaluation->rpe_translation_percent, evaluation->rpe_rotation_deg_per_100m, evaluation->rpe_odometry_translation_percent,
+                evaluation->rpe_odometry_rotation_deg_per_100m, evaluation->rpe_segments, evaluation->rpe_lengths.c_str());
+    std::printf("loop edges: %zu used, %zu wrong (precision %.3f); %zu ok, %zu wrong; recall %zu / %zu revisits within 30 m (%.3f)\n",
+                evaluation->used_loop_edges, evaluation->wrong_used_loop_edges, evaluation->precision, evaluation->ok_loop_edges,
+                evaluation->wrong_ok_loop_edges, evaluation->closed_revisits, evaluation->true_revisits, evaluation->recall);
+    if (evaluation->place_queries > 0)
+      std::printf("place recognition: %zu / %zu scans revisiting another session had a true match (10 m) among their candidates\n",
+                  evaluation->place_hits, evaluation->place_queries);
+  }
+  std::printf("wrote %s\n", options.out.c_str());
+}
+
+const CommandRegistration registration(75, [](CLI::App& app) {
+  auto options = std::make_shared<MapCommandOptions>();
+  CLI::App* command = app.add_subcommand("map", "One map from many scans: loop closure and multi-session mapping with a pose graph");
+  command->add_option("scans", options->scans, "SCANS.tsv: header, then session<TAB>scan<TAB>odometry (12 numbers or -)");
+  command->add_option("--kitti", options->kitti, "A KITTI velodyne folder (*.bin) instead of SCANS.tsv");
+  command->add_option("--kitti-poses", options->kitti_poses, "Its poses file (12 numbers a line; none: registered scan to scan)");
+  command->add_option("--kitti-calib", options->kitti_calibration, "Its calib file: camera poses become LiDAR poses Tr^-1 P Tr");
+  command->add_option("--out", options->out, "Output folder (replaced only once everything is written)")->required();
+  command->add_option("--gt", options->truth, "True poses (poses.tsv format): ATE, RPE, loop-edge precision and recall");
+  command->add_option("--scheduler", options->scheduler, "Dask scheduler address (Python's quadrix.map only)");
+  command->add_option("--preset", options->map.preset, "Registration preset of every scan: vlp64|vlp16|mid360|avia|monument|auto");
+  command->add_option("--loop-radius", options->map.loop_radius, "Radius of the loop search right after a loop, m");
+  command->add_option("--loop-radius-growth", options->map.loop_radius_growth, "Radius growth per metre travelled since the last loop");
+  command->add_option("--minimum-loop-travel", options->map.minimum_loop_travel, "A loop candidate lies at least this far back along the path, m");
+  command->add_option("--candidates-per-scan", options->map.candidates_per_scan, "Loop candidates registered per scan within a session");
+  command->add_option("--place-candidates", options->map.place_candidates_per_scan, "Candidates per scan across sessions (place descriptor)");
+  command->add_flag("!--no-ambiguous-edges", options->map.use_ambiguous_edges,
+                    "Leave ambiguous loop edges out of the graph (default: in, as switchable edges under DCS)");
+  command->add_option("--map-voxel", options->map.map_voxel, "map.ply keeps one point per cube of this edge, m");
+  command->callback([options] { run(*options); });
+});
+
+}  // namespace
+}  // namespace quadrix::cli

@@ -1,0 +1,249 @@
+// Mapping: the scan list's checks on bad input (each an Error naming the row), the evaluation's
+// metrics on known trajectories, and the whole pipeline on the real BALM walk with odometry drift
+// added (seeded random walk plus a yaw bias): the ATE after the pose graph, no wrong used loop edge.
+#include "estimation/mapping.h"
+#include "geometry/error.h"
+#include "geometry/io.h"
+#include "test_data.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <functional>
+#include <sstream>
+#include <unistd.h>
+
+namespace quadrix {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// A fresh temporary folder, removed at the end of the test.
+struct TemporaryFolder {
+  fs::path path;
+  TemporaryFolder() {
+    path = fs::temp_directory_path() / ("quadrix_map_test_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TemporaryFolder() { fs::remove_all(path); }
+};
+
+void write(const fs::path& path, const std::string& text) {
+  std::ofstream stream(path);
+  stream << text;
+}
+
+/// A small cloud file (a box of points) for list tests that need scans to exist.
+void write_cloud(const fs::path& path, double scale = 1.0) {
+  PointCloud cloud;
+  cloud.positions.resize(3, 400);
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> coordinate(-20.0f, 20.0f);
+  for (int index = 0; index < 400; ++index)
+    cloud.positions.col(index) = Eigen::Vector3f(coordinate(random), coordinate(random), coordinate(random) * 0.1f) * static_cast<float>(scale);
+  write_point_cloud(path.string(), cloud);
+}
+
+const std::string kIdentity = "1 0 0 0 0 1 0 0 0 0 1 0";
+
+std::string error_of(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(ScanList, ReadsSessionsOdometryAndPathsRelativeToTheList) {
+  TemporaryFolder folder;
+  write_cloud(folder.path / "a.ply");
+  write_cloud(folder.path / "b.ply");
+  write(folder.path / "scans.tsv", "session\tscan\todometry\nwalk\ta.ply\t" + kIdentity + "\nwalk\tb.ply\t1 0 0 2 0 1 0 0 0 0 1 0\n"
+                                   "car\tb.ply\t-\ncar\ta.ply\t-\n");
+  const ScanList list = read_scan_list((folder.path / "scans.tsv").string());
+  ASSERT_EQ(list.scans.size(), 4u);
+  EXPECT_EQ(list.sessions, (std::vector<std::string>{"walk", "car"}));
+  EXPECT_EQ(list.scans[1].path, (folder.path / "b.ply").string());
+  ASSERT_TRUE(list.scans[1].odometry.has_value());
+  EXPECT_NEAR(list.scans[1].odometry->translation().x(), 2.0, 1e-12);
+  EXPECT_FALSE(list.scans[2].odometry.has_value());
+  EXPECT_EQ(list.scans[3].row, 5u);
+}
+
+TEST(ScanList, BadInputIsAnErrorNamingTheRow) {
+  TemporaryFolder folder;
+  write_cloud(folder.path / "a.ply");
+  write_cloud(folder.path / "b.ply");
+  const fs::path list = folder.path / "scans.tsv";
+  const auto check = [&](const std::string& text, const std::string& expected) {
+    write(list, text);
+    const std::string message = error_of([&] { read_scan_list(list.string()); });
+    EXPECT_NE(message.find(expected), std::string::npos) << "message: '" << message << "' lacks '" << expected << "'";
+  };
+  const std::string header = "session\tscan\todometry\n";
+  check(header + "s\ta.ply\t-\ns\tmissing.ply\t-\n", "row 3: scan file");
+  check(header + "s\ta.ply\t1 0 0\ns\tb.ply\t-\n", "row 2: odometry: expected 12 numbers");
+  check(header + "s\ta.ply\t1 0 0 0 0 1 0 0 0 0 1 x\ns\tb.ply\t" + kIdentity + "\n", "row 2: odometry: pose number 12");
+  check(header + "s\ta.ply\t2 0 0 0 0 1 0 0 0 0 1 0\ns\tb.ply\t" + kIdentity + "\n", "not a rotation");
+  check(header + "s\ta.ply\t-\ns\tb.ply\t-\nt\ta.ply\t-\n", "row 4: session 't' has one scan");
+  check(header + "s\ta.ply\t-\ns\ta.ply\t-\n", "row 3: scan 'a.ply' of session 's' is listed twice");
+  check(header + "s\ta.ply\t-\ns\tb.ply\t" + kIdentity + "\n", "row 3: session 's' gives odometry on some rows");
+  check(header + "s\ta.ply\t-\nt\ta.ply\t-\nt\tb.ply\t-\ns\tb.ply\t-\n", "row 5: session 's' continues");
+  check("scan\todometry\n", "row 1: expected a header");
+}
+
+TEST(ScanList, ScansInMillimetresAreAnErrorAndNothingIsWritten) {
+  TemporaryFolder folder;
+  write_cloud(folder.path / "a.ply", 1000.0);
+  write_cloud(folder.path / "b.ply", 1000.0);
+  write(folder.path / "scans.tsv", "session\tscan\todometry\ns\ta.ply\t-\ns\tb.ply\t-\n");
+  const ScanList list = read_scan_list((folder.path / "scans.tsv").string());
+  const std::string message = error_of([&] { map_scans(list); });
+  EXPECT_NE(message.find("row 2 (a.ply)"), std::string::npos) << message;
+  EXPECT_NE(message.find("millimetres"), std::string::npos) << message;
+}
+
+TEST(PoseTable, ReadsOneColumnOrTwelveAndIgnoresTheFrame) {
+  TemporaryFolder folder;
+  write(folder.path / "poses.tsv", "session\tscan\tpose\tframe\ns\ta.ply\t1 0 0 3 0 1 0 0 0 0 1 0\tmap\n");
+  write(folder.path / "wide.tsv", "session\tscan\tr00\tr01\tr02\tt0\tr10\tr11\tr12\tt1\tr20\tr21\tr22\tt2\n"
+                                  "s\ta.ply\t1\t0\t0\t3\t0\t1\t0\t0\t0\t0\t1\t0\n");
+  for (const char* name : {"poses.tsv", "wide.tsv"}) {
+    const std::vector<PoseRow> rows = read_pose_table((folder.path / name).string());
+    ASSERT_EQ(rows.size(), 1u) << name;
+    EXPECT_NEAR(rows[0].pose.translation().x(), 3.0, 1e-12) << name;
+  }
+  write(folder.path / "bad.tsv", "session\tscan\tpose\ns\ta.ply\t1 0 0\n");
+  EXPECT_NE(error_of([&] { read_pose_table((folder.path / "bad.tsv").string()); }).find("row 2"), std::string::npos);
+}
+
+TEST(MapEvaluation, UmeyamaRecoversARigidMotionAndKittiErrorIsZeroOnTheTruth) {
+  std::mt19937 random(5);
+  std::normal_distribution<double> noise(0.0, 10.0);
+  Eigen::Matrix3Xd points(3, 20);
+  for (int index = 0; index < 20; ++index) points.col(index) = Eigen::Vector3d(noise(random), noise(random), noise(random));
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  motion.translation() = Eigen::Vector3d(4, -2, 9);
+  const Eigen::Isometry3d found = umeyama_alignment(points, motion * points);
+  EXPECT_TRUE(found.isApprox(motion, 1e-9));
+
+  std::vector<Eigen::Isometry3d> truth, biased;
+  for (int index = 0; index <= 300; ++index) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = Eigen::Vector3d(index, 0, 0);
+    truth.push_back(pose);
+    pose.translation() = Eigen::Vector3d(1.01 * index, 0, 0);  // 1 % scale error
+    biased.push_back(pose);
+  }
+  const auto [zero, zero_rotation, segments] = kitti_relative_error(truth, truth);
+  EXPECT_EQ(zero, 0.0);
+  EXPECT_GT(segments, 0u);
+  EXPECT_NEAR(std::get<0>(kitti_relative_error(biased, truth)), 1.0, 1e-6);
+}
+
+/// The BALM walk as a scan list with odometry that drifts: each step of the true motion is followed
+/// by a yaw of `yaw_bias_degrees` per metre plus noise (seeded), integrated from the first pose.
+struct DriftedWalk {
+  ScanList list;
+  std::vector<PoseRow> truth;
+};
+
+DriftedWalk drifted_balm(const fs::path& folder, unsigned seed, std::size_t first, std::size_t count, double yaw_bias_degrees,
+                         bool with_odometry = true) {
+  const std::string root = testing::shared_data_path("balm_sequence");
+  std::ifstream poses(root + "/poses.txt");
+  std::vector<std::pair<std::string, Eigen::Isometry3d>> walk;
+  std::string line;
+  while (std::getline(poses, line)) {
+    std::istringstream fields(line);
+    std::string name;
+    fields >> name;
+    Eigen::Matrix<double, 3, 4> matrix;
+    for (int k = 0; k < 12; ++k) fields >> matrix(k / 4, k % 4);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(matrix.leftCols<3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+    pose.linear() = svd.matrixU() * svd.matrixV().transpose();
+    pose.translation() = matrix.col(3);
+    walk.emplace_back(name, pose);
+  }
+  std::mt19937 random(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::ostringstream list;
+  list << "session\tscan\todometry\n";
+  DriftedWalk result;
+  Eigen::Isometry3d odometry = walk[first].second;
+  for (std::size_t index = first; index < std::min(walk.size(), first + count); ++index) {
+    if (index > first) {
+      Eigen::Isometry3d step = walk[index - 1].second.inverse() * walk[index].second;
+      const double length = step.translation().norm();
+      Eigen::Isometry3d error = Eigen::Isometry3d::Identity();
+      error.linear() = (Eigen::AngleAxisd(kPi / 180 * (yaw_bias_degrees * length + 0.3 * noise(random)), Eigen::Vector3d::UnitZ()) *
+                        Eigen::AngleAxisd(kPi / 180 * 0.2 * noise(random), Eigen::Vector3d::UnitX()))
+                           .toRotationMatrix();
+      error.translation() = (0.02 + 0.03 * length) * Eigen::Vector3d(noise(random), noise(random), 0.3 * noise(random));
+      odometry = odometry * step * error;
+    }
+    list << "walk\t" << root << "/" << walk[index].first << "\t";
+    for (int k = 0; k < 12; ++k)
+      if (with_odometry) list << (k ? " " : "") << odometry.matrix()(k / 4, k % 4);
+    list << (with_odometry ? "\n" : "-\n");
+    result.truth.push_back({"walk", root + "/" + walk[index].first, walk[index].second, ""});
+  }
+  write(folder / "scans.tsv", list.str());
+  result.list = read_scan_list((folder / "scans.tsv").string());
+  return result;
+}
+
+TEST(MappingBalm, DriftedWalkIsClosedWithinFifteenCentimetres) {
+  QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
+  TemporaryFolder folder;
+  const DriftedWalk walk = drifted_balm(folder.path, 2026, 0, 44, 0.5);
+  MapOptions options;
+  options.loop_radius = 8.0;  // 19 candidate pairs instead of the default radius's 51: the test stays near a minute
+  const MapResult result = map_scans(walk.list, options);
+  const MapEvaluation evaluation = evaluate_map(result, walk.truth);
+  std::printf("BALM, 44 scans: ATE %.3f m (odometry %.3f m); loop edges used %zu, wrong %zu; ok %zu wrong %zu; recall %zu/%zu; %.0f ms a scan\n",
+              evaluation.ate, evaluation.ate_odometry, evaluation.used_loop_edges, evaluation.wrong_used_loop_edges,
+              evaluation.ok_loop_edges, evaluation.wrong_ok_loop_edges, evaluation.closed_revisits, evaluation.true_revisits,
+              result.timings_ms.at("total") / result.list.scans.size());
+  EXPECT_GT(evaluation.ate_odometry, 1.0) << "the added drift should matter";
+  EXPECT_LE(evaluation.ate, 0.15);
+  EXPECT_EQ(evaluation.wrong_used_loop_edges, 0u);
+  EXPECT_GT(evaluation.used_loop_edges, 0u);
+  // The files: all there, and a second write replaces the first.
+  write_map((folder.path / "map").string(), result, options, map_evaluation_json(evaluation));
+  for (const char* name : {"poses.tsv", "edges.csv", "report.json", "map.ply", "map_model.qsm"})
+    EXPECT_TRUE(fs::exists(folder.path / "map" / name)) << name;
+  const std::vector<PoseRow> written = read_pose_table((folder.path / "map" / "poses.tsv").string());
+  ASSERT_EQ(written.size(), walk.list.scans.size());
+  EXPECT_TRUE(written.back().pose.isApprox(result.poses.back(), 1e-6));
+  EXPECT_EQ(written.back().frame, "map");
+}
+
+TEST(MappingBalm, WithoutOdometryConsecutiveScansAreRegistered) {
+  QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
+  TemporaryFolder folder;
+  // Ten scans of the walk once it moves (about 2 m apart), with no odometry at all.
+  const DriftedWalk walk = drifted_balm(folder.path, 1, 6, 10, 0.0, false);
+  ASSERT_FALSE(walk.list.scans[1].odometry.has_value());
+  const MapResult result = map_scans(walk.list);
+  std::size_t answered = 0;
+  for (const MapEdge& edge : result.edges)
+    if (edge.kind == MapEdgeKind::Odometry) answered += edge.status == "ok" || edge.status == "ambiguous";
+  EXPECT_EQ(answered, 9u);
+  const MapEvaluation evaluation = evaluate_map(result, walk.truth);
+  std::printf("BALM without odometry, 10 scans: registered odometry ATE %.3f m, map ATE %.3f m\n", evaluation.ate_odometry, evaluation.ate);
+  EXPECT_LE(evaluation.ate_odometry, 0.3);
+}
+
+}  // namespace
+}  // namespace quadrix
