@@ -59,7 +59,9 @@ TEST(TownDrive, WithoutDriftTheOdometryIsTheTrueRelativeMotion) {
     // odometry_i = truth_first^-1 * truth_i for every scan of every session.
     const Eigen::Isometry3d expected = first.truth.inverse() * scan.truth;
     EXPECT_LT((expected.matrix() - scan.odometry.matrix()).norm(), 1e-6) << "session " << scan.session << " scan " << scan.index;
-    if (scan.session == 1) EXPECT_LT((scan.truth.matrix() - scan.odometry.matrix()).norm(), 1e-6);
+    if (scan.session == 1) {
+      EXPECT_LT((scan.truth.matrix() - scan.odometry.matrix()).norm(), 1e-6);
+    }
   }
 }
 
