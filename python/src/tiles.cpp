@@ -8,6 +8,7 @@
 #include "fitting/tiled_modelling.h"
 #include "geometry/error.h"
 
+#include <pybind11/eval.h>
 #include <pybind11/stl.h>
 
 #include <filesystem>
@@ -92,6 +93,14 @@ primitives cut by tile borders and fits one quadric each. Returns a quadrix.Mode
 primitive found (no per-class cap, no augmented points). ValueError for a missing or repeated part.
 )doc");
 
+  // Dask pickles a task's function; a pybind11 function is not picklable, a Python function of
+  // this module is (by reference: workers import quadrix and look it up).
+  py::exec(R"(
+def _model_tiles_task(*arguments):
+    import quadrix
+    return quadrix.model_tiles(*arguments)
+)", module.attr("__dict__"));
+
   module.def(
       "model_tiled",
       [module](const py::object& cloud, const std::string& preset, double tile_size, double margin, const py::object& client,
@@ -118,7 +127,7 @@ primitive found (no per-class cap, no augmented points). ValueError for a missin
         if (groups < 1) throw Error("model_tiled: tiles must be at least 1");
         py::list futures;
         for (int group = 0; group < groups; ++group)
-          futures.append(client.attr("submit")(module.attr("model_tiles"), path, group, groups, preset, tile_size, margin,
+          futures.append(client.attr("submit")(module.attr("_model_tiles_task"), path, group, groups, preset, tile_size, margin,
                                                py::arg("pure") = false));
         const py::list parts = client.attr("gather")(futures);
         return module.attr("merge_tiles")(parts, preset, fitter).cast<std::shared_ptr<Model>>();
