@@ -340,11 +340,11 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       if (edge.status != "ok" && edge.status != "ambiguous") {
         // No answer: keep the previous motion (constant velocity), and say so.
         const Eigen::Isometry3d previous =
-            index >= begin + 2 ? result.odometry[index - 1].inverse() * result.odometry[index - 2] : Eigen::Isometry3d::Identity();
+            index >= begin + 2 ? result.odometry[index - 2].inverse() * result.odometry[index - 1] : Eigen::Isometry3d::Identity();
         edge.transform = previous;
         edge.note = "registration " + edge.status + ": previous motion kept; " + edge.note;
       }
-      result.odometry[index] = result.odometry[index - 1] * edge.transform.inverse();
+      result.odometry[index] = result.odometry[index - 1] * edge.transform;  // the edge maps this scan into the previous one's frame
       odometry_edges.push_back(edge);
     }
   }
