@@ -187,9 +187,14 @@ void write_map(const std::string& folder, const MapResult& result, const MapOpti
   try {
     const ScanList& list = result.list;
     std::ostringstream poses;
-    poses << "session\tscan\tpose\tframe\n";
+    // session, scan, the 12 numbers t00..t23 each in its own column (the format of truth tables), and
+    // the frame the pose is in ("map", or "own" for a session that joined nothing).
+    poses << "session\tscan";
+    for (int row = 0; row < 3; ++row)
+      for (int column = 0; column < 4; ++column) poses << "\tt" << row << column;
+    poses << "\tframe\n";
     for (std::size_t scan = 0; scan < list.scans.size(); ++scan)
-      poses << list.scans[scan].session << '\t' << list.scans[scan].scan << '\t' << pose_numbers(result.poses[scan], ' ') << '\t'
+      poses << list.scans[scan].session << '\t' << list.scans[scan].scan << '\t' << pose_numbers(result.poses[scan], '\t') << '\t'
             << (result.in_map_frame[scan] ? "map" : "own") << '\n';
     write_text(temporary / "poses.tsv", poses.str());
 

@@ -7,9 +7,11 @@
 // With --gt also the ATE, RPE and the loop edges' precision and recall. Exit 2 on bad input.
 #include "experiments/command_line/command_registry.h"
 #include "estimation/mapping.h"
+#include "experiments/reports/map_page.h"
 #include "geometry/error.h"
 
 #include <chrono>
+#include <filesystem>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -65,6 +67,8 @@ void run(const MapCommandOptions& options) {
     evaluation_json = map_evaluation_json(*evaluation);
   }
   write_map(options.out, result, options.map, evaluation_json);
+  // The 3-D page of the folder just written (trajectories, loop edges by status, the map).
+  const std::string page = write_map_page(options.out);
 
   std::size_t loops = 0, ok = 0, used = 0, within = 0;
   for (const MapEdge& edge : result.edges) {
@@ -96,7 +100,8 @@ void run(const MapCommandOptions& options) {
       std::printf("place recognition: %zu / %zu scans revisiting another session had a true match (10 m) among their candidates\n",
                   evaluation->place_hits, evaluation->place_queries);
   }
-  std::printf("wrote %s\n", options.out.c_str());
+  std::printf("wrote %s (poses.tsv, edges.csv, report.json, map.ply, map_model.qsm, %s)\n", options.out.c_str(),
+              std::filesystem::path(page).filename().string().c_str());
 }
 
 const CommandRegistration registration(75, [](CLI::App& app) {

@@ -150,8 +150,9 @@ std::vector<MapPagePose> read_map_poses(const std::string& path) {
       for (std::string word; words >> word;) fields.push_back(word);
     }
     if (number == 1 && !fields.empty() && fields[0] == "session") continue;  // header
-    if (fields.size() != 14)
-      throw file_error(path, "line " + std::to_string(number) + ": expected session, scan and 12 numbers (14 fields), got " +
+    // A trailing column (quadrix map's `frame`) may follow the 12 numbers.
+    if (fields.size() != 14 && fields.size() != 15)
+      throw file_error(path, "line " + std::to_string(number) + ": expected session, scan and 12 numbers (14 fields, or 15 with a frame), got " +
                                  std::to_string(fields.size()));
     std::vector<double> values;
     for (std::size_t k = 2; k < 14; ++k) values.push_back(number_field(fields[k], path, number, std::to_string(k + 1)));
