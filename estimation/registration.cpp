@@ -1110,17 +1110,18 @@ int status_rank(RegistrationStatus status) {
 }
 
 // The global answer and the one from the initial guess, both verified, compete: the better status
-// wins, then (same status) the one landing more of the source on the target (check_overlap's
-// measure); the global answer wins ties. Two `ok` answers that disagree leave the winner
+// wins, then (same status, answers that disagree) the one landing more of the source on the target
+// (check_overlap's measure); the global answer wins ties and agreeing answers. Two `ok` answers that disagree leave the winner
 // `ambiguous` (findings.guess_disagrees). The result keeps the global run's candidates and counts,
 // and its timings with the guess's run added as "initial_guess".
 RegistrationResult compete_with_guess(RegistrationResult global, RegistrationResult guessed, const RegistrationOptions& options) {
   const auto overlap_of = [](const RegistrationResult& r) { return r.overlap ? r.overlap->transformed : 0.0; };
   const int global_rank = status_rank(global.status), guess_rank = status_rank(guessed.status);
-  const bool guess_wins = guess_rank < global_rank || (guess_rank == global_rank && guess_rank < 2 && overlap_of(guessed) > overlap_of(global));
   const bool both_ok = global_rank == 0 && guess_rank == 0;
   const bool disagree = translation_error(global.transform, guessed.transform) > options.ambiguity.translation_disagreement ||
                         rotation_error_degrees(global.transform, guessed.transform) > options.ambiguity.rotation_disagreement_degrees;
+  const bool guess_wins = guess_rank < global_rank ||
+                          (guess_rank == global_rank && guess_rank < 2 && disagree && overlap_of(guessed) > overlap_of(global));
   double guess_ms = 0.0;
   for (const auto& [stage, ms] : guessed.timings_ms) guess_ms += ms;
   std::ostringstream other;

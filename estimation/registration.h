@@ -280,8 +280,8 @@ using ModelAdjustment = std::function<SceneModel(const SceneModel&)>;
 /// With `options.local_only`, no quadric is matched: the answer is point-to-plane ICP from
 /// `options.initial_guess` (coarse to fine from `initial_guess_reach`), verified by the same checks
 /// (candidates empty, result.from_initial_guess). With an initial guess and not local_only, that
-/// answer is verified beside the global one and they compete: the better status wins, then the
-/// larger overlap (the global answer on ties); two `ok` answers that disagree leave the winner
+/// answer is verified beside the global one and they compete: the better status wins, then, for
+/// answers that disagree, the larger overlap (the global answer on ties and when they agree); two `ok` answers that disagree leave the winner
 /// `ambiguous` (findings.guess_disagrees). Last, measure_answer_quality of the answer fills fitness,
 /// inlier_rmse, correspondences and information ("quality" timing). Throws quadrix::Error for
 /// local_only without a guess, a non-finite guess, a reach that is not positive or quality options

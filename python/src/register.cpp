@@ -223,8 +223,9 @@ source_origin, target_origin: where each side's sensor stood in its cloud's fram
     report's other transforms and the models are between the sensor-centred clouds.
 initial_guess: optional 4x4 pose mapping source into target (odometry, a previous answer; keyword-only),
     in the frames given. Point-to-plane ICP from it is verified beside the global answer and the
-    better verified one wins (``ok`` over ``ambiguous``, then the larger overlap; two ``ok`` answers
-    that disagree leave the winner ``ambiguous``).
+    better verified one wins (``ok`` over ``ambiguous``, then, for answers that disagree, the larger
+    overlap; the global answer when they agree; two ``ok`` answers that disagree leave the winner
+    ``ambiguous``).
 local_only: with ``initial_guess``: skip the global quadric matching; the answer is ICP from the
     guess, and the same checks decide ok or ambiguous (keyword-only).
 
