@@ -230,10 +230,10 @@ const char* const kPageScript = R"JS(
   function table(rows) {
     return el('table', {}, rows.map(function (row) { return el('tr', {}, [el('td', {}, [row[0]]), el('td', {'class': 'n'}, [row[1]])]); }));
   }
-  function fill(parent, children) {
+  function appendAll(parent, children) {
     children.forEach(function (child) {
       if (child === null || child === undefined) return;
-      if (Array.isArray(child)) fill(parent, child);
+      if (Array.isArray(child)) appendAll(parent, child);
       else parent.appendChild(typeof child === 'object' ? child : document.createTextNode(String(child)));
     });
   }
@@ -309,7 +309,7 @@ const char* const kPageScript = R"JS(
         el('td', {}, [String(c.refinement_status) + (c.valid ? '' : ' (invalid)')]), el('td', {'class': 'n'}, [number(c.score, 4)])]));
     });
     var lineToggle = el('input', {type: 'checkbox', id: 'lines', checked: ''});
-    fill(panel, [
+    appendAll(panel, [
       el('h1', {}, [data.title]), statusBlock(report.status, report.message, data.note),
       el('div', {}, [el('button', {id: 'show-aligned'}, ['source aligned']), el('button', {id: 'show-scanned'}, ['source as scanned']),
                      el('button', {id: 'show-answer'}, ['reported answer']),
@@ -400,7 +400,7 @@ const char* const kPageScript = R"JS(
         rows.push(el('tr', {}, cells));
       }
       pick.textContent = '';
-      fill(pick, [el('b', {}, ['quadric ' + q.index]), ': ' + q.type + ', class ' + q.class + ', ' + q.points + ' points', el('br'),
+      appendAll(pick, [el('b', {}, ['quadric ' + q.index]), ': ' + q.type + ', class ' + q.class + ', ' + q.points + ' points', el('br'),
                   '21-number record (paper Struct. 1):', el('table', {}, rows)]);
       pick.style.display = 'block';
       requestRender();
@@ -413,7 +413,7 @@ const char* const kPageScript = R"JS(
       return el('label', {'class': 'toggle'}, [el('input', {type: 'checkbox', 'data-class': c, checked: ''}), c + ' (' + classCount[c] + ')']);
     });
     var pointsToggle = el('input', cloud ? {type: 'checkbox', id: 'points', checked: ''} : {type: 'checkbox', id: 'points', disabled: ''});
-    fill(panel, [
+    appendAll(panel, [
       el('h1', {}, [data.title]), statusBlock(data.status, data.message, ''),
       table((data.facts || []).map(function (f) { return [f[0], f[1]]; })),
       el('div', {}, [data.quadrics.length + ' quadrics; click one for its record']),
