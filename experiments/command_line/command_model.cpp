@@ -332,7 +332,9 @@ void print_model_summary(const ModelCommandOptions& options, const PresetChoice&
               options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
               result.extraction.points_in_range, result.extraction.isolated_points, modelling.fitter.c_str());
   std::printf("%s\n", preset_summary_line(preset.requested, preset.used, preset.notes, options.verbose).c_str());
-  std::printf("status: %s\n\n", status_summary_line(modelling_status_name(result.status), result.message, options.verbose).c_str());
+  // A model that is not ok says in full why and what to give (e.g. --sensor-origin): the terminal is where that is read.
+  const bool whole_message = options.verbose || result.status != ModellingStatus::Ok;
+  std::printf("status: %s\n\n", status_summary_line(modelling_status_name(result.status), result.message, whole_message).c_str());
   std::printf("%-12s %-20s %9s %9s\n", "class", "type", "elements", "quadrics");
   for (const auto& [key, count] : quadric_counts)
     std::printf("%-12s %-20s %9d %9d\n", key.first.c_str(), key.second.c_str(), element_counts[key.first], count);
