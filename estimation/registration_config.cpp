@@ -1095,7 +1095,8 @@ SensorGuess guess_sensor_preset(const PointCloud& cloud) {
   reason << guess.point_count << " points";
   if (measured.size() < cloud.size()) reason << " (" << cloud.size() - measured.size() << " isolated left out)";
   reason << ", azimuth coverage " << 100.0 * guess.azimuth_coverage << "%, "
-         << guess.ring_count << " elevation rings over " << guess.elevation_span_degrees << " deg, median range "
+         << (guess.ring_count > 0 ? std::to_string(guess.ring_count) + " elevation rings" : std::string("rings not separable"))
+         << ", elevation span " << guess.elevation_span_degrees << " deg, median range "
          << guess.median_range << " m -> ";
   guess.preset = choose_preset(guess, reason);
   guess.minimum_range = extraction_preset(guess.preset).minimum_range;

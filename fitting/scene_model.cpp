@@ -1,6 +1,7 @@
 // SceneModel: class names and types (REFERENCE.md "Class -> quadric type"), validation, and the
 // binary and JSON file formats (paper Struct. 1 records, 21 numbers each).
 #include "fitting/scene_model.h"
+#include "fitting/shape_parameters.h"
 
 #include "geometry/error.h"
 #include "geometry/io.h"
@@ -590,6 +591,7 @@ std::string scene_model_to_json(const SceneModel& model, const std::string& extr
                                           record.full_rotation.z()})
         << ",\n     \"rotation_matrix\": " << json_array(rotation_matrix)
         << ",\n     \"center\": " << json_array(std::vector<double>(record.full_center.data(), record.full_center.data() + 3))
+        << ",\n     \"shape\": " << shape_parameters_json(record_shape_parameters(record, model.types[index]))
         << ",\n     \"record\": " << json_array(values) << "}";
   }
   out << (model.records.empty() ? "],\n" : "\n  ],\n");

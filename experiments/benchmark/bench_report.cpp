@@ -82,11 +82,27 @@ std::string timings_text(const std::map<std::string, double>& timings) {
   return text;
 }
 
-// Tableau-like palette of the plots, one colour per method.
-const char* colour(std::size_t index) {
+// Colour `index` of `count` series: the Tableau-like palette while it lasts, else evenly spaced
+// hues alternating in lightness, so that no two series of a plot share a colour.
+std::string colour(std::size_t index, std::size_t count) {
   static const char* colours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
                                   "#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#393b79", "#ad494a"};
-  return colours[index % 12];
+  if (count <= 12) return colours[index];
+  return "hsl(" + std::to_string(static_cast<int>(360.0 * static_cast<double>(index) / static_cast<double>(count))) + ",70%," +
+         (index % 2 == 0 ? "42%" : "62%") + ")";
+}
+
+// Width a line of SVG text takes at `font_size` px in a sans-serif font, generously (0.6 em a character).
+int text_width(const std::string& text, int font_size) {
+  return static_cast<int>(std::ceil(0.6 * font_size * static_cast<double>(text.size())));
+}
+
+// The smallest of 1, 2, 5 x 10^k at least `value` (> 0): an axis end that follows the data.
+double nice_ceiling(double value) {
+  const double decade = std::pow(10.0, std::floor(std::log10(value)));
+  for (const double step : {1.0, 2.0, 5.0, 10.0})
+    if (step * decade >= value * (1.0 - 1e-12)) return step * decade;
+  return 10.0 * decade;
 }
 
 std::string escape_xml(const std::string& text) {
@@ -106,7 +122,7 @@ std::string with_method_legend(const std::string& body, const std::vector<Method
   svg << body;
   for (std::size_t m = 0; m < summaries.size(); ++m)
     svg << "<rect x=\"" << x << "\" y=\"" << top + 18 * static_cast<int>(m) << "\" width=\"12\" height=\"12\" fill=\""
-        << colour(m) << "\"/><text x=\"" << x + 18 << "\" y=\"" << top + 10 + 18 * static_cast<int>(m) << "\">"
+        << colour(m, summaries.size()) << "\"/><text x=\"" << x + 18 << "\" y=\"" << top + 10 + 18 * static_cast<int>(m) << "\">"
         << escape_xml(summaries[m].method) << "</text>\n";
   svg << "</svg>\n";
   return svg.str();
@@ -605,12 +621,14 @@ std::vector<MethodSummary> merge_bench_outputs(const std::vector<std::string>& f
 std::string bench_success_svg(const std::vector<MethodSummary>& summaries) {
   const std::vector<std::string> difficulties = difficulty_order(nullptr, summaries);
   const int left = 60, top = 40, plot_height = 240, group_width = std::max<int>(60, 24 * static_cast<int>(summaries.size()) + 30);
-  const int width = left + group_width * static_cast<int>(std::max<std::size_t>(difficulties.size(), 1)) + 180;
+  const std::string title = "Success rate per difficulty (RTE <= 2 m, RRE <= 5 deg)";
+  const int width = std::max(left + group_width * static_cast<int>(std::max<std::size_t>(difficulties.size(), 1)) + 180,
+                             left + text_width(title, 14) + 20);  // the title fits
   const int height = top + plot_height + 60;
   std::ostringstream svg;
   svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
       << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  svg << "<text x=\"" << left << "\" y=\"20\" font-size=\"14\">Success rate per difficulty (RTE &lt;= 2 m, RRE &lt;= 5 deg)</text>\n";
+  svg << "<text x=\"" << left << "\" y=\"20\" font-size=\"14\">" << escape_xml(title) << "</text>\n";
   for (int percent = 0; percent <= 100; percent += 25) {
     const double y = top + plot_height * (1.0 - percent / 100.0);
     svg << "<line x1=\"" << left << "\" x2=\"" << width - 180 << "\" y1=\"" << y << "\" y2=\"" << y << "\" stroke=\"#ddd\"/>"
@@ -624,7 +642,7 @@ std::string bench_success_svg(const std::vector<MethodSummary>& summaries) {
       const double rate = double(found->second.first) / double(found->second.second);
       const double bar = plot_height * rate;
       svg << "<rect x=\"" << x0 + 24 * static_cast<int>(m) << "\" y=\"" << top + plot_height - bar << "\" width=\"20\" height=\""
-          << bar << "\" fill=\"" << colour(m) << "\"><title>" << escape_xml(summaries[m].method) << " "
+          << bar << "\" fill=\"" << colour(m, summaries.size()) << "\"><title>" << escape_xml(summaries[m].method) << " "
           << escape_xml(difficulties[d]) << ": " << found->second.first << "/" << found->second.second << "</title></rect>\n";
     }
     svg << "<text x=\"" << x0 + 12 * static_cast<int>(summaries.size()) << "\" y=\"" << top + plot_height + 18
@@ -640,20 +658,31 @@ std::string bench_error_cdf_svg(const std::vector<MethodSummary>& summaries) {
   std::ostringstream svg;
   svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
       << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  // Errors are plotted up to twice the success threshold; the dashed line marks the threshold.
-  const struct {
+  // The axis follows the data: it ends at the largest error rounded up to 1/2/5 x 10^k, but at
+  // most at twice the success threshold (failures' errors, metres to kilometres, are drawn at the
+  // right edge). The dashed line marks the threshold when it is inside the axis.
+  struct Panel {
     const char* name;
     double limit;
     double threshold;
   } panels[2] = {{"RTE (m)", 4.0, 2.0}, {"RRE (deg)", 10.0, 5.0}};
   for (int p = 0; p < 2; ++p) {
+    double largest = 0.0;
+    for (const MethodSummary& summary : summaries)
+      for (const double value : p == 0 ? summary.rte_values : summary.rre_values)
+        if (std::isfinite(value)) largest = std::max(largest, value);
+    if (largest > 0.0) panels[p].limit = std::min(panels[p].limit, nice_ceiling(largest));
+  }
+  for (int p = 0; p < 2; ++p) {
     const int x0 = left + p * (panel_width + gap);
-    svg << "<text x=\"" << x0 << "\" y=\"20\" font-size=\"14\">CDF of " << panels[p].name << ", pairs with ground truth</text>\n";
+    svg << "<text x=\"" << x0 << "\" y=\"20\" font-size=\"14\">CDF of " << panels[p].name << "</text>\n";
     svg << "<rect x=\"" << x0 << "\" y=\"" << top << "\" width=\"" << panel_width << "\" height=\"" << panel_height
         << "\" fill=\"none\" stroke=\"#888\"/>\n";
-    const double threshold_x = x0 + panel_width * panels[p].threshold / panels[p].limit;
-    svg << "<line x1=\"" << threshold_x << "\" x2=\"" << threshold_x << "\" y1=\"" << top << "\" y2=\"" << top + panel_height
-        << "\" stroke=\"#999\" stroke-dasharray=\"4,3\"/>\n";
+    if (panels[p].threshold <= panels[p].limit) {
+      const double threshold_x = x0 + panel_width * panels[p].threshold / panels[p].limit;
+      svg << "<line x1=\"" << threshold_x << "\" x2=\"" << threshold_x << "\" y1=\"" << top << "\" y2=\"" << top + panel_height
+          << "\" stroke=\"#999\" stroke-dasharray=\"4,3\"/>\n";
+    }
     for (int tick = 0; tick <= 4; ++tick) {
       const double value = panels[p].limit * tick / 4.0;
       svg << "<text x=\"" << x0 + panel_width * tick / 4 << "\" y=\"" << top + panel_height + 16 << "\" text-anchor=\"middle\">"
@@ -675,9 +704,11 @@ std::string bench_error_cdf_svg(const std::vector<MethodSummary>& summaries) {
         previous_y = y;
       }
       points << " " << x0 + panel_width << "," << previous_y;
-      svg << "<polyline fill=\"none\" stroke-width=\"2\" stroke=\"" << colour(m) << "\" points=\"" << points.str() << "\"/>\n";
+      svg << "<polyline fill=\"none\" stroke-width=\"2\" stroke=\"" << colour(m, summaries.size()) << "\" points=\"" << points.str() << "\"/>\n";
     }
   }
+  svg << "<text x=\"" << left << "\" y=\"" << height - 8 << "\" fill=\"#555\">pairs with ground truth; dashed: the success "
+         "threshold (2 m, 5 deg); errors past the axis end are drawn at its edge</text>\n";
   return with_method_legend(svg.str(), summaries, width - 170, top);
 }
 
@@ -695,12 +726,13 @@ std::string bench_time_svg(const std::vector<MethodSummary>& summaries) {
   if (!(longest > 0.0)) longest = 1.0;
   const int left = 140, top = 40, bar_height = 22, plot_width = 460;
   const int height = top + 30 * static_cast<int>(summaries.size()) + 40 + 18 * static_cast<int>(stages.size());
-  const int width = left + plot_width + 40;
+  const std::string title = "Median time per stage (ms; a bar is the sum of its stages' medians, longest " +
+                            format("%.0f", longest) + " ms)";
+  const int width = std::max(left + plot_width + 40, 10 + text_width(title, 14) + 10);  // the title fits
   std::ostringstream svg;
   svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
       << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  svg << "<text x=\"10\" y=\"20\" font-size=\"14\">Median time per stage (ms; bar length = sum of stage medians, longest "
-      << format("%.0f", longest) << " ms)</text>\n";
+  svg << "<text x=\"10\" y=\"20\" font-size=\"14\">" << escape_xml(title) << "</text>\n";
   for (std::size_t m = 0; m < summaries.size(); ++m) {
     const int y = top + 30 * static_cast<int>(m);
     svg << "<text x=\"" << left - 8 << "\" y=\"" << y + 15 << "\" text-anchor=\"end\">" << escape_xml(summaries[m].method) << "</text>\n";
@@ -709,7 +741,7 @@ std::string bench_time_svg(const std::vector<MethodSummary>& summaries) {
       const auto found = summaries[m].stage_ms.find(stages[k]);
       if (found == summaries[m].stage_ms.end()) continue;
       const double w = plot_width * found->second.first / longest;
-      svg << "<rect x=\"" << x << "\" y=\"" << y << "\" width=\"" << w << "\" height=\"" << bar_height << "\" fill=\"" << colour(k)
+      svg << "<rect x=\"" << x << "\" y=\"" << y << "\" width=\"" << w << "\" height=\"" << bar_height << "\" fill=\"" << colour(k, stages.size())
           << "\"><title>" << escape_xml(stages[k]) << ": " << format("%.2f", found->second.first) << " ms</title></rect>\n";
       x += w;
     }
@@ -717,7 +749,7 @@ std::string bench_time_svg(const std::vector<MethodSummary>& summaries) {
   const int legend_top = top + 30 * static_cast<int>(summaries.size()) + 20;
   for (std::size_t k = 0; k < stages.size(); ++k)
     svg << "<rect x=\"" << left << "\" y=\"" << legend_top + 18 * static_cast<int>(k) << "\" width=\"12\" height=\"12\" fill=\""
-        << colour(k) << "\"/><text x=\"" << left + 18 << "\" y=\"" << legend_top + 10 + 18 * static_cast<int>(k) << "\">"
+        << colour(k, stages.size()) << "\"/><text x=\"" << left + 18 << "\" y=\"" << legend_top + 10 + 18 * static_cast<int>(k) << "\">"
         << escape_xml(stages[k]) << "</text>\n";
   svg << "</svg>\n";
   return svg.str();

@@ -42,6 +42,7 @@ const CommandRegistration registration(45, [](CLI::App& app) {
       "Run every quadric fitter on synthetic segments (type x noise x visible fraction x outliers), held-apart segments "
       "cut from simulated scans and real segments; "
       "write fitters.csv, fitters.md and fitters.svg");
+  command->group(kResearchCommands);
   command->add_option("--types", options->types, "Synthetic types (default: plane line sphere ellipsoid cylinder elliptic_cylinder cone)")
       ->delimiter(',');
   command->add_option("--noise", options->noise, "Gaussian noise sigmas in metres (default: 0,0.01,0.02,0.05)")->delimiter(',');

@@ -40,6 +40,7 @@ const CommandRegistration registration(46, [](CLI::App& app) {
       "compare-refiners",
       "Refine perturbed poses with every refiner backend x algorithm x robust loss on synthetic monument/street models "
       "and real KITTI loop closures; write refiners.csv, refiners.md and refiners.svg");
+  command->group(kResearchCommands);
   command->add_option("--scenes", options->scenes, "Synthetic scenes (default: monument,street)")->delimiter(',');
   std::string names;
   for (const auto& name : refiner_names()) names += (names.empty() ? "" : ", ") + name;

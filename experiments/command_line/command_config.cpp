@@ -17,7 +17,7 @@ namespace quadrix::cli {
 namespace {
 
 struct ConfigCommandOptions {
-  std::string cloud;            ///< cloud the auto preset measures (required for auto)
+  std::string cloud;            ///< cloud the auto preset measures (without it: the defaults auto starts from)
   std::string preset = "auto";  ///< preset name or auto
   std::string config;           ///< YAML overrides applied after the preset
   bool schema = false;          ///< print registration_config_schema instead of a configuration
@@ -28,16 +28,29 @@ void run(const ConfigCommandOptions& options) {
     std::printf("%s", registration_config_schema().c_str());
     return;
   }
-  if (options.preset == "auto" && options.cloud.empty())
-    throw Error("quadrix config: --preset auto measures a cloud: give CLOUD, or name a preset with --preset");
   if (!options.config.empty() && !std::filesystem::exists(options.config))
     throw file_error(options.config, "configuration file does not exist");
+  // auto without a cloud: auto chooses per cloud, so the defaults shown are those it starts from
+  // (the library's choice for a cloud with nothing to measure), with the rule it applies.
+  const bool auto_without_cloud = options.preset == "auto" && options.cloud.empty();
   const PointCloud cloud = options.cloud.empty() ? PointCloud{} : read_point_cloud(options.cloud);
   std::string notes;
-  RegistrationOptions registration = resolve_registration_options(options.preset, cloud, options.preset, cloud, &notes);
+  RegistrationOptions registration = auto_without_cloud
+                                         ? registration_preset(guess_sensor_preset(PointCloud{}).preset)
+                                         : resolve_registration_options(options.preset, cloud, options.preset, cloud, &notes);
   if (!options.config.empty()) apply_registration_config(options.config, registration);
-  std::printf("# quadrix config: preset %s%s%s\n", registration.source_extraction.preset.c_str(),
-              options.cloud.empty() ? "" : " for ", options.cloud.c_str());
+  if (auto_without_cloud) {
+    std::printf("# quadrix config: preset auto (the default of register, model and Python) chooses per cloud:\n"
+                "#   narrow azimuth coverage (< 50%%) -> avia; more than 1.5 M points -> monument;\n"
+                "#   elevation span < 35 deg -> vlp64 (>= 60 k points or >= 48 rings) or vlp16; else mid360;\n"
+                "#   it also levels the extraction on the measured up axis and crops a platform's own body.\n"
+                "# Without CLOUD these are the defaults it starts from (preset %s);\n"
+                "# `quadrix config CLOUD` shows what auto picks for CLOUD.\n",
+                registration.source_extraction.preset.c_str());
+  } else {
+    std::printf("# quadrix config: preset %s%s%s%s\n", options.preset == "auto" ? "auto -> " : "",
+                registration.source_extraction.preset.c_str(), options.cloud.empty() ? "" : " for ", options.cloud.c_str());
+  }
   if (!notes.empty()) std::printf("# %s\n", notes.c_str());
   std::printf("%s", registration_config_yaml(registration).c_str());
 }

@@ -1,5 +1,6 @@
 // `quadrix fit INPUT --type T --fitter NAME`: fits one quadric to a whole point cloud (an element)
-// and prints the result as JSON.
+// and prints the result as JSON: the plain shape parameters ("shape": radius, axis, height, apex,
+// half-angle, normal, offset... as the type has them) beside the canonical q, scale, rotation, center.
 #include "experiments/command_line/command_registry.h"
 #include "experiments/reports/fit_report.h"
 #include "fitting/quadric_fitter.h"
@@ -45,7 +46,7 @@ const CommandRegistration registration(40, [](CLI::App& app) {
     const PointCloud cloud = read_point_cloud(options->input, read_options);
     const Eigen::Matrix3Xd points = cloud.positions.cast<double>();
     const QuadricFit fit = fitter->fit(points, Eigen::Matrix3Xd(), hint);
-    std::cout << fit_report_json(fit, fitter->name(), cloud.size()) << std::endl;
+    std::cout << fit_report_json(fit, fitter->name(), cloud.size(), 2, points) << std::endl;
   });
 });
 

@@ -19,6 +19,7 @@ const CommandRegistration registration(22, [](CLI::App& app) {
       "fitter-segments",
       "Simulate scans of the synthetic scenes with every sensor and cut one segment per primitive seen (partial, "
       "ring-sampled, noisy, with neighbours' points); write points.npy, segments.npy and segments.json");
+  command->group(kResearchCommands);
   command->add_option("--seed", options->seed, "Seed of scenes, sensor places and noise")->capture_default_str();
   command->add_option("--scans", options->scans, "Scans to simulate (scenes and sensors cycle)")->capture_default_str();
   command->add_option("--object-scans", options->object_scans, "Scans of one object on the ground, after the scene scans")

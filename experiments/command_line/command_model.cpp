@@ -9,6 +9,7 @@
 // partial model of one group of tiles, which `model merge` joins.
 #include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
+#include "experiments/command_line/terminal_text.h"
 #include "experiments/reports/interactive_page.h"
 #include "experiments/reports/model_picture.h"
 #include "experiments/studies/modelling_evaluation.h"
@@ -22,7 +23,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -42,7 +46,9 @@ struct ModelCommandOptions {
   std::vector<std::string> inputs;    ///< point-cloud files (several: stations of one static scan, merged with `poses`)
   std::vector<std::string> poses;     ///< sensor -> world pose file of each input (4x4 row-major), for merging
   std::string format = "auto";        ///< input format override
-  std::string preset = "vlp64";       ///< extraction preset
+  std::string preset = "auto";        ///< sensor preset, or auto (measured on the cloud, as `register` and Python's model() do)
+  std::string config;                 ///< YAML overrides applied after the preset (keys: quadrix config --schema)
+  bool verbose = false;               ///< print the auto preset's measurements and the per-stage timings
   std::string labels;                 ///< SemanticKITTI .label file (switches to the labels semantic mode)
   std::string score_labels;           ///< SemanticKITTI .label file the element classes are scored against (the mode is unchanged)
   std::string fitter;                 ///< QuadricFitter registry name (empty: the preset's)
@@ -71,6 +77,14 @@ struct ModelMergeOptions {
   std::string binary;                 ///< model binary (.qsm)
 };
 
+// The preset a run used: as asked, as resolved (auto names the preset it chose) and, for auto,
+// the measurements behind the choice.
+struct PresetChoice {
+  std::string requested;  ///< --preset as given (a name or auto)
+  std::string used;       ///< the preset whose options ran
+  std::string notes;      ///< auto's measurements and rule ("" for a named preset)
+};
+
 // A distinct colour per element (golden-ratio hue walk, full saturation).
 std::array<std::uint8_t, 3> element_color(std::size_t index) {
   const double hue = std::fmod(0.13 + 0.618033988749895 * static_cast<double>(index), 1.0) * 6.0;
@@ -88,8 +102,23 @@ std::array<std::uint8_t, 3> element_color(std::size_t index) {
   return {byte(r), byte(g), byte(b)};
 }
 
-TriangleMesh model_mesh(const ModellingResult& result, const Eigen::Matrix3Xd& points) {
-  TriangleMesh mesh;
+// The ground's colour in --mesh and --picture: pale, so that it frames the structures without hiding them.
+constexpr std::array<std::uint8_t, 3> kGroundMeshColor{226, 220, 205};
+
+// The mesh of every fitted quadric, with what its picture needs: the box of the structures' vertices
+// (2nd..98th percentile per axis, ground left out, so the picture frames the scene's content rather
+// than a ground plane reaching to the crop radius) and a legend of the types drawn.
+struct ModelMesh {
+  TriangleMesh mesh;                                                     ///< every quadric inside its extent
+  Eigen::AlignedBox3d content;                                           ///< where the structures are (empty: ground only)
+  std::vector<std::pair<std::array<std::uint8_t, 3>, std::string>> legend;  ///< colour and type name, ground last
+};
+
+ModelMesh model_mesh(const ModellingResult& result, const Eigen::Matrix3Xd& points) {
+  ModelMesh out;
+  std::map<std::string, std::array<std::uint8_t, 3>> types_drawn;
+  bool ground_drawn = false;
+  std::vector<double> coordinates[3];
   for (std::size_t record_index = 0; record_index < result.model.augmented_begin; ++record_index) {
     const QuadricDecomposition shape = result.model.records[record_index].quadric().decompose();
     if (shape.type == QuadricType::Invalid || shape.type == QuadricType::Imaginary) continue;
@@ -106,9 +135,32 @@ TriangleMesh model_mesh(const ModellingResult& result, const Eigen::Matrix3Xd& p
     }
     extent.minimum.array() -= 0.05;
     extent.maximum.array() += 0.05;
-    append_mesh(mesh, mesh_surface(shape, extent, 24), quadric_type_color(result.model.types[record_index]));
+    const bool ground = element.element_class == ElementClass::Ground;
+    const QuadricType type = result.model.types[record_index];
+    const TriangleMesh surface = mesh_surface(shape, extent, 24);
+    append_mesh(out.mesh, surface, ground ? kGroundMeshColor : quadric_type_color(type));
+    if (surface.triangles.empty()) continue;
+    if (ground) {
+      ground_drawn = true;
+      continue;
+    }
+    types_drawn[quadric_type_name(type)] = quadric_type_color(type);
+    for (Eigen::Index v = 0; v < surface.vertices.cols(); ++v)
+      for (int axis = 0; axis < 3; ++axis) coordinates[axis].push_back(surface.vertices(axis, v));
   }
-  return mesh;
+  if (!coordinates[0].empty()) {
+    Eigen::Vector3d low, high;
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double>& values = coordinates[axis];
+      std::sort(values.begin(), values.end());
+      low[axis] = values[static_cast<std::size_t>(0.02 * static_cast<double>(values.size() - 1))];
+      high[axis] = values[static_cast<std::size_t>(std::ceil(0.98 * static_cast<double>(values.size() - 1)))];
+    }
+    out.content = Eigen::AlignedBox3d(low, high);
+  }
+  for (const auto& [name, color] : types_drawn) out.legend.push_back({color, name});
+  if (ground_drawn) out.legend.push_back({kGroundMeshColor, "ground"});
+  return out;
 }
 
 PointCloud element_cloud(const ModellingResult& result, const PointCloud& cloud) {
@@ -216,12 +268,13 @@ void print_class_scores(const ClassScores& scores) {
 // The model's header fields beside its records in model.json: inputs, preset, fitter, statuses,
 // raw size, the points in range and how many were isolated, the extracted elements per class and,
 // with --score-labels, the class scores.
-std::string model_json_extra(const ModelCommandOptions& options, const ModellingOptions& modelling,
+std::string model_json_extra(const ModelCommandOptions& options, const PresetChoice& preset, const ModellingOptions& modelling,
                              const ModellingResult& result, double raw_bytes,
                              const std::map<std::string, int>& element_counts, const std::optional<ClassScores>& scores) {
-  std::string extra = "\"input\": \"" + std::filesystem::path(options.inputs.front()).filename().string() + "\", \"inputs\": " +
-                      std::to_string(options.inputs.size()) + ", \"preset\": \"" +
-                      options.preset + "\", \"fitter\": \"" + modelling.fitter + "\", \"status\": \"" +
+  std::string extra = "\"input\": " + nlohmann::json(std::filesystem::path(options.inputs.front()).filename().string()).dump() + ", \"inputs\": " +
+                      std::to_string(options.inputs.size()) + ", \"preset\": \"" + preset.used +
+                      "\", \"preset_requested\": \"" + preset.requested + "\", \"preset_notes\": " +
+                      nlohmann::json(preset.notes).dump() + ", \"fitter\": \"" + modelling.fitter + "\", \"status\": \"" +
                       modelling_status_name(result.status) + "\", \"extraction_status\": \"" +
                       extraction_status_name(result.extraction.status) + "\", \"raw_cloud_bytes\": " +
                       std::to_string(static_cast<long long>(raw_bytes)) + ", \"points_in_range\": " +
@@ -240,15 +293,18 @@ std::string model_json_extra(const ModelCommandOptions& options, const Modelling
 // The mesh of every quadric (--mesh) and its picture (--picture), when asked for.
 void write_mesh_outputs(const ModelCommandOptions& options, const ModellingResult& result, const Eigen::Matrix3Xd& points) {
   if (options.mesh.empty() && options.picture.empty()) return;
-  const TriangleMesh mesh = model_mesh(result, points);
-  if (!options.mesh.empty()) write_mesh_ply(options.mesh, mesh);
+  const ModelMesh drawn = model_mesh(result, points);
+  if (!options.mesh.empty()) write_mesh_ply(options.mesh, drawn.mesh);
   if (options.picture.empty()) return;
-  if (mesh.triangles.empty()) throw Error("--picture " + options.picture + ": the model has no quadric to draw");
+  if (drawn.mesh.triangles.empty()) throw Error("--picture " + options.picture + ": the model has no quadric to draw");
   MeshPictureOptions view;
   view.azimuth_deg = options.view_azimuth_deg;
   view.elevation_deg = options.view_elevation_deg;
   view.zoom = options.view_zoom;
-  write_mesh_picture(options.picture, mesh, view);
+  view.frame_box = drawn.content;
+  view.legend = drawn.legend;
+  view.title = std::filesystem::path(options.inputs.front()).filename().string();
+  write_mesh_picture(options.picture, drawn.mesh, view);
 }
 
 // Where the interactive page goes: beside the JSON (model.json -> model.html), never the JSON's own
@@ -263,7 +319,7 @@ std::string model_page_path(const ModelCommandOptions& options) {
 // The interactive page beside the JSON (model.json -> model.html), with the same extents as --mesh.
 // Returns its path, or "" when skipped or not buildable (libjs-three missing: a warning only, since
 // the model is written).
-std::string write_model_page(const ModelCommandOptions& options, const ModellingOptions& modelling,
+std::string write_model_page(const ModelCommandOptions& options, const PresetChoice& preset, const ModellingOptions& modelling,
                              const ModellingResult& result, const PointCloud& cloud, const Eigen::Matrix3Xd& points) {
   if (options.no_page) return "";
   const SceneModel& model = result.model;
@@ -273,7 +329,7 @@ std::string write_model_page(const ModelCommandOptions& options, const Modelling
                (options.inputs.size() > 1 ? " + " + std::to_string(options.inputs.size() - 1) + " more" : "");
   page.status = modelling_status_name(result.status);
   page.message = result.message;
-  page.facts = {{"preset", options.preset}, {"fitter", modelling.fitter}, {"points", std::to_string(cloud.size())},
+  page.facts = {{"preset", preset.used}, {"fitter", modelling.fitter}, {"points", std::to_string(cloud.size())},
                 {"elements", std::to_string(result.extraction.elements.size())},
                 {"records", std::to_string(model.size()) + " (" + std::to_string(model.augmented_count()) + " augmented points)"}};
   page.quadrics = page_quadrics(model);
@@ -294,17 +350,19 @@ std::string write_model_page(const ModelCommandOptions& options, const Modelling
 
 // The terminal summary: counts per class and type, timings, the model's size against the raw
 // cloud's, the ground, and every file written.
-void print_model_summary(const ModelCommandOptions& options, const ModellingOptions& modelling, const ModellingResult& result,
+void print_model_summary(const ModelCommandOptions& options, const PresetChoice& preset, const ModellingOptions& modelling, const ModellingResult& result,
                          const PointCloud& cloud, const std::map<std::pair<std::string, std::string>, int>& quadric_counts,
                          std::map<std::string, int> element_counts, std::size_t binary_size, double raw_bytes,
                          const std::string& page_path) {
   const SceneModel& model = result.model;
-  std::printf("quadrix model %s%s  (%zu points, %zu in range, %zu of them isolated and left out, preset %s, fitter %s)\n",
+  std::printf("quadrix model %s%s  (%zu points, %zu in range, %zu of them isolated and left out, fitter %s)\n",
               options.inputs.front().c_str(),
               options.inputs.size() > 1 ? (" + " + std::to_string(options.inputs.size() - 1) + " more").c_str() : "", cloud.size(),
-              result.extraction.points_in_range, result.extraction.isolated_points, options.preset.c_str(), modelling.fitter.c_str());
-  std::printf("status: %s%s%s\n\n", modelling_status_name(result.status).c_str(), result.message.empty() ? "" : " - ",
-              result.message.c_str());
+              result.extraction.points_in_range, result.extraction.isolated_points, modelling.fitter.c_str());
+  std::printf("%s\n", preset_summary_line(preset.requested, preset.used, preset.notes, options.verbose).c_str());
+  // A model that is not ok says in full why and what to give (e.g. --sensor-origin): the terminal is where that is read.
+  const bool whole_message = options.verbose || result.status != ModellingStatus::Ok;
+  std::printf("status: %s\n\n", status_summary_line(modelling_status_name(result.status), result.message, whole_message).c_str());
   std::printf("%-12s %-20s %9s %9s\n", "class", "type", "elements", "quadrics");
   for (const auto& [key, count] : quadric_counts)
     std::printf("%-12s %-20s %9d %9d\n", key.first.c_str(), key.second.c_str(), element_counts[key.first], count);
@@ -315,13 +373,14 @@ void print_model_summary(const ModelCommandOptions& options, const ModellingOpti
   }
   std::printf("%-12s %-20s %9s %9zu\n", "augmented", "point", "", model.augmented_count());
   std::printf("%-12s %-20s %9zu %9zu\n\n", "total", "", result.extraction.elements.size(), model.size());
-  std::printf("timings (ms, 2 shared cores):");
+  if (options.verbose) std::printf("timings (ms, 2 shared cores):");
   for (const char* stage : {"crop", "isolated_points", "ground", "planes", "clusters", "lines", "simplification", "normals", "shape_detection",
                             "fitting", "selection", "augmentation", "total"}) {
     const auto it = model.timings_ms.find(stage);
-    if (it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);
+    if (options.verbose && it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);
   }
-  std::printf("\nmodel: %s binary (%zu records x 21 numbers)", human_bytes(static_cast<double>(binary_size)).c_str(),
+  if (options.verbose) std::printf("\n");
+  std::printf("model: %s binary (%zu records x 21 numbers)", human_bytes(static_cast<double>(binary_size)).c_str(),
               model.size());
   if (raw_bytes > 0.0)
     std::printf(" vs raw cloud %s (%.0fx smaller)", human_bytes(raw_bytes).c_str(), raw_bytes / static_cast<double>(binary_size));
@@ -475,14 +534,11 @@ void run_merge(const ModelMergeOptions& options) {
 void run(const ModelCommandOptions& options) {
   if (options.inputs.empty()) throw Error("model: INPUT is required (or `quadrix model merge PARTS... --out M`)");
   if (options.out.empty()) throw Error("model: --out is required");
-  ExtractionOptions extraction = extraction_preset(options.preset);
-  if (options.plane_method == "cgal")
-    extraction.planes.method = PlaneMethod::CgalRegionGrowing;
-  else if (options.plane_method != "voxel")
+  if (options.plane_method != "voxel" && options.plane_method != "cgal")
     throw Error("--plane-method: expected voxel or cgal, got '" + options.plane_method + "'");
-  ModellingOptions modelling = registration_preset(options.preset).modelling;
-  if (!options.fitter.empty()) modelling.fitter = options.fitter;
-  make_quadric_fitter(modelling.fitter);  // fail early with the list of fitters
+  if (!options.config.empty() && !std::filesystem::exists(options.config))
+    throw file_error(options.config, "configuration file does not exist");
+  if (!options.fitter.empty()) make_quadric_fitter(options.fitter);  // fail early with the list of fitters
   // A picture's camera needs numbers: inf would draw nothing.
   if (!std::isfinite(options.view_azimuth_deg)) throw Error("--view-azimuth: expected a finite angle in degrees");
   if (!(options.view_elevation_deg >= -89.0 && options.view_elevation_deg <= 89.0))
@@ -494,6 +550,7 @@ void run(const ModelCommandOptions& options) {
   inputs.insert(inputs.end(), options.poses.begin(), options.poses.end());
   inputs.push_back(options.labels);
   inputs.push_back(options.score_labels);
+  inputs.push_back(options.config);
   check_outputs({{"--out", options.out},
                  {"--binary", options.binary},
                  {"--mesh", options.mesh},
@@ -501,18 +558,12 @@ void run(const ModelCommandOptions& options) {
                  {"--picture", options.picture},
                  {"the page beside --out (--no-page skips it)", model_page_path(options)}},
                 inputs);
-  // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
-  if (extraction.static_scan) modelling.quadrics_per_class = std::numeric_limits<int>::max();
   TilingOptions tiling;
   if (!(options.tile_size >= 0.0) || !std::isfinite(options.tile_size))
     throw Error("--tile-size: expected a tile edge > 0 m (0: tiles only above --memory-budget)");
   tiling.tile_size = options.tile_size;
   tiling.memory_budget = parse_bytes(options.memory_budget, "--memory-budget");
   if (!options.tile.empty()) parse_tile_group(options.tile, tiling.group, tiling.groups);
-  if (!extraction.static_scan && (options.tile_size > 0.0 || !options.tile.empty()))
-    throw Error("--tile-size, --tile: tile-by-tile modelling is for static scans (--preset monument), not preset '" +
-                options.preset + "'");
-
   CloudReadOptions read_options;
   read_options.format = cloud_format_from_name(options.format);
   const Eigen::Vector3d sensor_origin(options.sensor_origin.data());
@@ -524,15 +575,33 @@ void run(const ModelCommandOptions& options) {
   if (centred && (options.inputs.size() != 1 || !options.poses.empty()))
     throw Error("--sensor-origin: takes one input without --poses (stations merged by pose are modelled in the world frame)");
   const PointCloud cloud = read_merged_clouds(options, read_options);
-  if (extraction.static_scan && (options.tile_size > 0.0 || !options.tile.empty() || tiling_needed(cloud.size(), tiling))) {
-    run_tiled(options, extraction, modelling, cloud, sensor_origin, tiling);
-    return;
-  }
   // A cloud in a map's frame is modelled centred on its sensor (the extraction measures ranges and
   // heights from the origin), and the model is moved back: every output is in the file's frame.
   const PointCloud centred_cloud = centred ? centred_on_sensor(cloud, sensor_origin) : PointCloud();
   if (centred) require_finite_points(centred_cloud, "--sensor-origin moved " + options.inputs.front());
   const PointCloud& modelled = centred ? centred_cloud : cloud;
+  // The library's preset resolution (as `register` and Python's model() do it): a named preset, or
+  // auto measured on the cloud (its up axis and platform crop set on the extraction), then --config.
+  std::string notes;
+  RegistrationOptions registration = resolve_registration_side(options.preset, modelled, "source", &notes);
+  if (!options.config.empty()) apply_registration_config(options.config, registration, "source");
+  ExtractionOptions extraction = registration.source_extraction;
+  if (options.plane_method == "cgal") extraction.planes.method = PlaneMethod::CgalRegionGrowing;
+  ModellingOptions modelling = registration.modelling;
+  if (!options.fitter.empty()) modelling.fitter = options.fitter;
+  make_quadric_fitter(modelling.fitter);
+  const PresetChoice preset{options.preset, extraction.preset, notes};
+  if (!extraction.static_scan && (options.tile_size > 0.0 || !options.tile.empty()))
+    throw Error("--tile-size, --tile: tile-by-tile modelling is for static scans (--preset monument), not preset '" +
+                extraction.preset + "'");
+  if (extraction.static_scan) {
+    // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
+    modelling.quadrics_per_class = std::numeric_limits<int>::max();
+    if (options.tile_size > 0.0 || !options.tile.empty() || tiling_needed(cloud.size(), tiling)) {
+      run_tiled(options, extraction, modelling, cloud, sensor_origin, tiling);
+      return;
+    }
+  }
   std::vector<std::uint32_t> labels;
   if (!options.labels.empty()) {
     labels = read_semantic_kitti_labels(options.labels, cloud.size());
@@ -559,7 +628,7 @@ void run(const ModelCommandOptions& options) {
   for (const std::string& input : options.inputs)
     if (std::filesystem::exists(input)) raw_bytes += static_cast<double>(std::filesystem::file_size(input));
 
-  write_scene_model_json(options.out, model, model_json_extra(options, modelling, result, raw_bytes, element_counts, scores));
+  write_scene_model_json(options.out, model, model_json_extra(options, preset, modelling, result, raw_bytes, element_counts, scores));
   if (!options.binary.empty()) write_scene_model_binary(options.binary, model);
   const Eigen::Matrix3Xd points = cloud.positions.cast<double>().colwise() + cloud.local_origin;  // the file's frame
   write_mesh_outputs(options, result, points);
@@ -570,8 +639,8 @@ void run(const ModelCommandOptions& options) {
   }
   const PointCloud page_cloud = cloud.local_origin.isZero(0.0) ? PointCloud() : centred_on_sensor(cloud, Eigen::Vector3d::Zero());
   const std::string page_path =
-      write_model_page(options, modelling, result, cloud.local_origin.isZero(0.0) ? cloud : page_cloud, points);
-  print_model_summary(options, modelling, result, cloud, quadric_counts, element_counts, binary_bytes.size(), raw_bytes,
+      write_model_page(options, preset, modelling, result, cloud.local_origin.isZero(0.0) ? cloud : page_cloud, points);
+  print_model_summary(options, preset, modelling, result, cloud, quadric_counts, element_counts, binary_bytes.size(), raw_bytes,
                       page_path);
   if (scores) print_class_scores(*scores);
 }
@@ -586,8 +655,12 @@ const CommandRegistration registration(50, [](CLI::App& app) {
                       "frame (TLS stations)")
       ->delimiter(',');
   std::string presets;
-  for (const auto& name : extraction_preset_names()) presets += (presets.empty() ? "" : "|") + name;
-  command->add_option("--preset", options->preset, "Sensor preset: " + presets)->capture_default_str();
+  for (const auto& name : registration_preset_names()) presets += name + "|";
+  command->add_option("--preset", options->preset,
+                      "Sensor preset: " + presets + "auto (chosen from the cloud: field of view, rings, size; as `register`)")
+      ->capture_default_str();
+  command->add_option("--config", options->config,
+                      "YAML overrides applied after the preset (keys: quadrix config --schema; the source side's)");
   command->add_option("--sensor-origin", options->sensor_origin,
                       "Where the sensor stood in the file's frame, X,Y,Z in metres (default: the origin). For a cloud in "
                       "a map's frame: it is modelled centred on its sensor, and every output is in the file's frame")
@@ -617,6 +690,7 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   command->add_option("--view-elevation", options->view_elevation_deg, "Picture camera elevation, degrees (-89..89)")
       ->capture_default_str();
   command->add_option("--view-zoom", options->view_zoom, "Picture zoom (> 1 moves the camera closer)")->capture_default_str();
+  command->add_flag("-v,--verbose", options->verbose, "Also print auto's measurements, the whole status message and the stage timings");
   command->add_flag("--no-page", options->no_page, "Do not write the interactive page (--out with .html) beside the JSON");
   command->add_option("--tile-size", options->tile_size,
                       "Static scans: model tile by tile with square tiles of this edge in x-y, m (default: tiles only "

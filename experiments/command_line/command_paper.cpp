@@ -21,6 +21,7 @@ struct PaperCommandOptions {
 const CommandRegistration registration(75, [](CLI::App& app) {
   auto options = std::make_shared<PaperCommandOptions>();
   CLI::App* command = app.add_subcommand("paper", "Write the QuadricsReg paper page: our benchmark results beside the paper's tables");
+  command->group(kResearchCommands);
   command->add_option("--results", options->results, "Folder of benchmark runs (one `quadrix bench --out` folder each)")
       ->capture_default_str();
   command->add_option("--tables", options->tables, "Folder of the paper's tables as CSV")->capture_default_str();

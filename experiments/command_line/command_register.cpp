@@ -13,6 +13,7 @@
 // failed); 2 on bad input (unreadable file, unknown preset or config key).
 #include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
+#include "experiments/command_line/terminal_text.h"
 #include "estimation/registration_config.h"
 #include "experiments/reports/interactive_page.h"
 #include "experiments/reports/registration_report.h"
@@ -49,7 +50,65 @@ struct RegisterCommandOptions {
   std::string out;             ///< output folder
   std::string refiner;         ///< refiner override (ceres | nlopt)
   bool no_page = false;        ///< skip view.html in the output folder
+  bool verbose = false;        ///< print the whole status message, auto's measurements and the stage timings
 };
+
+// The terminal summary: the transform and a few one-line facts; the whole status message, auto's
+// measurements and the stage timings with --verbose (and in report.json).
+void print_register_summary(const RegisterCommandOptions& options, const RegistrationOptions& registration,
+                            const std::string& notes, const RegistrationResult& result, const Eigen::Vector3d& source_origin,
+                            const Eigen::Vector3d& target_origin, const std::optional<Eigen::Isometry3d>& ground_truth,
+                            double load_ms, double preset_ms, double total_ms) {
+  const bool verbose = options.verbose;
+  const std::string details = options.out.empty() ? "--verbose" : "--verbose, report.json";
+  std::printf("quadrix register %s -> %s\n", options.source.c_str(), options.target.c_str());
+  const std::string source_preset = options.source_preset.empty() ? options.preset : options.source_preset;
+  const std::string target_preset = options.target_preset.empty() ? options.preset : options.target_preset;
+  const std::string& source_used = registration.source_extraction.preset;
+  const std::string& target_used = registration.target_extraction.preset;
+  if (source_preset == target_preset && source_used == target_used)
+    std::printf("%s\n", preset_summary_line(source_preset, source_used, notes, verbose, details).c_str());
+  else
+    std::printf("source %s\ntarget %s\n", preset_summary_line(source_preset, source_used, notes, verbose, details).c_str(),
+                preset_summary_line(target_preset, target_used, verbose ? "" : notes, false, details).c_str());
+  for (const std::string& check : switched_off_checks(registration)) std::printf("note: %s\n", check.c_str());
+  const Eigen::Matrix4d matrix = between_cloud_frames(result.transform, source_origin, target_origin).matrix();
+  for (int r = 0; r < 4; ++r)
+    std::printf("%12.6f %12.6f %12.6f %12.6f\n", matrix(r, 0), matrix(r, 1), matrix(r, 2), matrix(r, 3));
+  std::printf("status %s\n",
+              status_summary_line(registration_status_name(result.status), result.message, verbose, details).c_str());
+  const RegistrationCounts& c = result.counts;
+  std::string cliques;
+  for (const std::size_t size : c.clique_sizes) cliques += (cliques.empty() ? "" : "/") + std::to_string(size);
+  const OverlapMeasure& overlap = *result.overlap;  // register_clouds measured it (check_overlap)
+  std::printf("quadrics %zu/%zu, correspondences %zu, cliques %s | overlap %.2f (unmoved %.2f)", c.source_quadrics,
+              c.target_quadrics, c.correspondences, cliques.empty() ? "-" : cliques.c_str(), overlap.transformed,
+              overlap.identity);
+  if (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous)
+    std::printf(" | fitness %.2f, RMSE %.3f m%s", result.fitness, result.inlier_rmse,
+                result.from_initial_guess ? ", from the guess" : "");
+  std::printf(" | %.0f ms\n", total_ms);
+  if (verbose) {
+    // A stage that did not run (a local registration matches no quadrics) took 0 ms.
+    const auto ms = [&](const char* stage) {
+      const auto found = result.timings_ms.find(stage);
+      return found == result.timings_ms.end() ? 0.0 : found->second;
+    };
+    std::printf("timings (ms, 2 shared cores): load %.0f, preset %.0f, model %.0f + %.0f, match %.0f, estimate %.0f, select %.0f\n",
+                load_ms, preset_ms, ms("modelling_source"), ms("modelling_target"),
+                ms("correspondences") + ms("graphs") + ms("cliques"), ms("estimation"), ms("selection"));
+    std::printf("overlap measured at %.1f m", overlap.distance);
+    if (c.source_isolated_points + c.target_isolated_points > 0)
+      std::printf("; %zu + %zu isolated points left out", c.source_isolated_points, c.target_isolated_points);
+    std::printf("\n");
+  }
+  if (ground_truth) {
+    const double rte = translation_error(result.transform, *ground_truth);
+    const double rre = rotation_error_degrees(result.transform, *ground_truth);
+    std::printf("RTE %.3f m, RRE %.3f deg -> %s\n", rte, rre,
+                registration_succeeded(result.transform, *ground_truth) ? "SUCCESS" : "FAILURE");
+  }
+}
 
 void run(const RegisterCommandOptions& options) {
   using Clock = std::chrono::steady_clock;
@@ -116,42 +175,8 @@ void run(const RegisterCommandOptions& options) {
   const RegistrationResult result = register_clouds(source, target, registration, source_labels, target_labels);
   const double total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 
-  std::printf("quadrix register %s -> %s  (presets: source %s, target %s)\n", options.source.c_str(), options.target.c_str(),
-              registration.source_extraction.preset.c_str(), registration.target_extraction.preset.c_str());
-  if (!notes.empty()) std::printf("%s\n", notes.c_str());
-  for (const std::string& check : switched_off_checks(registration)) std::printf("note: %s\n", check.c_str());
-  const Eigen::Matrix4d matrix = between_cloud_frames(result.transform, source_origin, target_origin).matrix();
-  for (int r = 0; r < 4; ++r)
-    std::printf("%12.6f %12.6f %12.6f %12.6f\n", matrix(r, 0), matrix(r, 1), matrix(r, 2), matrix(r, 3));
-  const RegistrationCounts& c = result.counts;
-  std::string cliques;
-  for (const std::size_t size : c.clique_sizes) cliques += (cliques.empty() ? "" : "/") + std::to_string(size);
-  // A stage that did not run (local registration matches no quadrics) took 0 ms.
-  const auto ms = [&](const char* stage) {
-    const auto found = result.timings_ms.find(stage);
-    return found == result.timings_ms.end() ? 0.0 : found->second;
-  };
-  std::printf("status %s | %.0f ms total (load %.0f, preset %.0f, model %.0f + %.0f, match %.0f, estimate %.0f, select %.0f) | "
-              "quadrics %zu/%zu, correspondences %zu, cliques %s",
-              registration_status_name(result.status), total_ms, load_ms, preset_ms, ms("modelling_source"),
-              ms("modelling_target"), ms("correspondences") + ms("graphs") + ms("cliques"), ms("estimation"),
-              ms("selection"), c.source_quadrics, c.target_quadrics, c.correspondences, cliques.empty() ? "-" : cliques.c_str());
-  const OverlapMeasure overlap = *result.overlap;  // register_clouds measured it (check_overlap)
-  std::printf(" | overlap %.2f (unmoved %.2f) at %.1f m", overlap.transformed, overlap.identity, overlap.distance);
-  if (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous)
-    std::printf(" | fitness %.3f, inlier RMSE %.3f m%s", result.fitness, result.inlier_rmse,
-                result.from_initial_guess ? ", from the initial guess" : "");
-  if (c.source_isolated_points + c.target_isolated_points > 0)
-    std::printf(", %zu + %zu isolated points left out", c.source_isolated_points, c.target_isolated_points);
-  if (ground_truth) {
-    const double rte = translation_error(result.transform, *ground_truth);
-    const double rre = rotation_error_degrees(result.transform, *ground_truth);
-    std::printf(" | RTE %.3f m, RRE %.3f deg -> %s", rte, rre,
-                registration_succeeded(result.transform, *ground_truth) ? "SUCCESS" : "FAILURE");
-  }
-  std::printf("\n");
-  if (!result.message.empty()) std::printf("%s\n", result.message.c_str());
-
+  print_register_summary(options, registration, notes, result, source_origin, target_origin, ground_truth, load_ms, preset_ms,
+                         total_ms);
   if (output_folder) {
     RegistrationReportContext context;
     context.source_path = options.source;
@@ -162,7 +187,7 @@ void run(const RegisterCommandOptions& options) {
     context.load_ms = load_ms;
     context.total_ms = total_ms;
     context.ground_truth = ground_truth;
-    context.overlap = overlap;
+    context.overlap = *result.overlap;  // register_clouds measured it (check_overlap)
     context.source_sensor_origin = source_origin;
     context.target_sensor_origin = target_origin;
     FolderReplacement& folder = *output_folder;
@@ -170,7 +195,11 @@ void run(const RegisterCommandOptions& options) {
     // merged.ply in the target file's frame; the picture, the models and the page stay sensor-centred.
     write_point_cloud(folder.path("merged.ply"),
                       centred_on_sensor(merge_aligned_clouds(source, target, result.transform), -target_origin));
-    write_birds_eye_png(folder.path("bev.png"), source, target, result.transform);
+    BirdsEyeOptions picture;
+    picture.status = registration_status_name(result.status);
+    picture.title = std::filesystem::path(options.source).filename().string() + " -> " +
+                    std::filesystem::path(options.target).filename().string();
+    write_birds_eye_png(folder.path("bev.png"), source, target, result.transform, picture);
     // The models, so `quadrix view DIR` can draw the clique's correspondences between record centres.
     write_scene_model_json(folder.path("source_model.json"), result.source_model);
     write_scene_model_json(folder.path("target_model.json"), result.target_model);
@@ -236,6 +265,8 @@ const CommandRegistration registration(60, [](CLI::App& app) {
   command->add_option("--out", options->out,
                       "Folder for report.json, merged.ply, bev.png, source_model.json, target_model.json and view.html");
   command->add_flag("--no-page", options->no_page, "With --out: do not write the interactive page view.html");
+  command->add_flag("-v,--verbose", options->verbose,
+                    "Also print the whole status message, auto's measurements and the stage timings (all are in report.json)");
   command->callback([options] { run(*options); });
 });
 

@@ -17,6 +17,10 @@ struct CommandRegistration {
   CommandRegistration(int order, CommandAdder add);
 };
 
+/// The --help group of the commands that reproduce the paper's studies (fitter-segments,
+/// compare-fitters, compare-refiners, paper), listed apart from the user's commands.
+inline constexpr const char* kResearchCommands = "Research commands (the paper's studies)";
+
 /// Calls every registered adder on `app`, in order (used by main()).
 void add_registered_commands(CLI::App& app);
 

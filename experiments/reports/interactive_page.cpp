@@ -55,6 +55,46 @@ std::string escape_script_text(std::string text) {
   return out;
 }
 
+// JSON text embedded in a <script> element: `<`, `>` and `&` (which JSON only holds inside strings)
+// and U+2028/U+2029 written as \u escapes, so no string from data (a file named "<!--<script>.bin",
+// a crafted report) can close the element or change how the HTML parser reads it. JSON.parse reads
+// the same values back.
+std::string json_for_script(const std::string& text) {
+  std::string out;
+  out.reserve(text.size() + 64);
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '<') {
+      out += "\\u003c";
+    } else if (c == '>') {
+      out += "\\u003e";
+    } else if (c == '&') {
+      out += "\\u0026";
+    } else if (c == '\xE2' && i + 2 < text.size() && text[i + 1] == '\x80' && (text[i + 2] == '\xA8' || text[i + 2] == '\xA9')) {
+      out += text[i + 2] == '\xA8' ? "\\u2028" : "\\u2029";
+      i += 2;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+// A file named by a folder's own description (scene.json's scans[].cloud): relative, and inside
+// the folder once links are resolved. `quadrix view DIR` reads nothing outside DIR.
+std::filesystem::path file_inside_folder(const std::filesystem::path& folder, const std::string& name, const std::string& where) {
+  const std::filesystem::path relative(name);
+  const std::filesystem::path normal = relative.lexically_normal();
+  if (name.empty() || relative.is_absolute() || relative.has_root_name() || (!normal.empty() && *normal.begin() == ".."))
+    throw file_error(where, "\"" + name + "\" is not a file inside the folder (expected a path relative to it)");
+  const std::filesystem::path base = std::filesystem::weakly_canonical(folder);
+  const std::filesystem::path resolved = std::filesystem::weakly_canonical(folder / relative);
+  const auto mismatch = std::mismatch(base.begin(), base.end(), resolved.begin(), resolved.end());
+  if (mismatch.first != base.end())
+    throw file_error(where, "\"" + name + "\" leads outside the folder (a link to " + resolved.string() + ")");
+  return resolved;
+}
+
 std::string base64(const void* data, std::size_t bytes) {
   static const char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   const auto* in = static_cast<const unsigned char*>(data);
@@ -158,7 +198,7 @@ std::string page_html(const std::string& title, const json& data) {
           escape_script_text(three) + "\n</script>\n";
   html += "<script>/* " + std::string(kThreeJsDirectory) + "/examples/js/controls/OrbitControls.js (libjs-three, MIT) */\n" +
           escape_script_text(controls) + "\n</script>\n";
-  html += "<script type=\"application/json\" id=\"quadrix-data\">" + escape_script_text(data.dump(-1, ' ', false, json::error_handler_t::replace)) + "</script>\n";
+  html += "<script type=\"application/json\" id=\"quadrix-data\">" + json_for_script(data.dump(-1, ' ', false, json::error_handler_t::replace)) + "</script>\n";
   html += "<script>\n" + escape_script_text(kPageScript) + "\n</script>\n</body>\n</html>\n";
   return html;
 }
@@ -459,7 +499,9 @@ ModelPageInput read_synthetic_folder_page(const std::string& directory) {
   std::size_t total = 0;
   std::map<long long, std::vector<std::uint32_t>> primitive_points;  // indices into the merged cloud
   for (const json& scan : require(scene, "scans", scene_path)) {
-    const PointCloud cloud = read_point_cloud((folder / require(scan, "cloud", scene_path).get<std::string>()).string());
+    const json& name = require(scan, "cloud", scene_path);
+    if (!name.is_string()) throw file_error(scene_path, "scans[].cloud: expected a file name (a string)");
+    const PointCloud cloud = read_point_cloud(file_inside_folder(folder, name.get<std::string>(), scene_path + ": scans[].cloud").string());
     const Eigen::Isometry3f pose = matrix_from_rows(require(scan, "sensor_to_world", scene_path), scene_path + ": sensor_to_world").cast<float>();
     PointCloud world;
     world.positions = pose * cloud.positions;

@@ -27,6 +27,9 @@ button { margin: 2px 4px 2px 0; }
 #pick { position: absolute; left: 8px; bottom: 8px; max-width: 520px; background: rgba(255,255,255,0.92);
         border: 1px solid #bbb; padding: 6px 8px; display: none; font-size: 12px; }
 #pick table td { padding: 0 4px; font-variant-numeric: tabular-nums; }
+#page-error, #no-webgl { position: absolute; left: 8px; top: 28px; max-width: 520px; padding: 8px 10px; font-size: 13px;
+                        background: #fbe4e4; border: 1px solid #c66; color: #600; white-space: pre-wrap; }
+#no-webgl { background: #fff4d6; border-color: #c9a23a; color: #5a4200; }
 #help { position: absolute; left: 8px; top: 6px; color: #555; font-size: 12px; background: rgba(255,255,255,0.7); }
 )CSS";
 
@@ -38,6 +41,14 @@ const char* const kPageErrorHook = R"JS(
     window.quadrixErrors.push(message);
     document.body.setAttribute('data-error', window.quadrixErrors.join(' | '));
     document.title = 'quadrix view error: ' + message;
+    // Shown, not only recorded: a page that failed says so in visible text.
+    var banner = document.getElementById('page-error');
+    if (!banner) {
+      banner = document.createElement('div');
+      banner.id = 'page-error';
+      document.body.appendChild(banner);
+    }
+    banner.textContent = 'This page hit an error: ' + window.quadrixErrors.join(' | ');
   }
   window.addEventListener('error', function (event) {
     record((event.message || 'error') + (event.filename ? ' (' + event.filename + ':' + event.lineno + ')' : ''));
@@ -89,28 +100,61 @@ const char* const kPageScript = R"JS(
     }
     return positions;
   }
-  function escapeHtml(text) {
-    return String(text).replace(/[&<>"]/g, function (c) { return {'&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;'}[c]; });
+  // An element built from data: attributes set as attributes, children appended, strings as text
+  // nodes. Data never becomes markup (no innerHTML anywhere), so a crafted report cannot run script.
+  function el(tag, attributes, children) {
+    var node = document.createElement(tag);
+    Object.keys(attributes || {}).forEach(function (name) { node.setAttribute(name, String(attributes[name])); });
+    (children || []).forEach(function (child) {
+      if (child === null || child === undefined) return;
+      node.appendChild(typeof child === 'object' ? child : document.createTextNode(String(child)));
+    });
+    return node;
+  }
+  function swatch(colour) {
+    var node = el('span', {'class': 'swatch'});
+    node.style.background = colour;
+    return node;
   }
   function number(value, digits) {
     if (value === null || value === undefined) return '-';
-    if (typeof value !== 'number') return escapeHtml(value);
+    if (typeof value !== 'number') return String(value);
     if (Number.isInteger(value) && Math.abs(value) < 1e15) return String(value);
     return Math.abs(value) >= 1e5 || (value !== 0 && Math.abs(value) < 1e-3) ? value.toExponential(digits === undefined ? 3 : digits)
                                                                               : value.toFixed(digits === undefined ? 3 : digits);
   }
-  function rgb(c) { return 'rgb(' + c[0] + ',' + c[1] + ',' + c[2] + ')'; }
+  function rgb(c) { return 'rgb(' + Number(c[0]) + ',' + Number(c[1]) + ',' + Number(c[2]) + ')'; }
 
   // ---- three.js scene ----
-  var renderer = new THREE.WebGLRenderer({antialias: data.kind === 'model', preserveDrawingBuffer: true});  // points need no MSAA (costly in software GL)
+  // Without a WebGL context (a browser with WebGL off, a remote desktop, headless without a GPU)
+  // the panel is still built and the view says so in visible text.
+  var renderer = null, errorsBefore = window.quadrixErrors.length;
+  try {
+    renderer = new THREE.WebGLRenderer({antialias: data.kind === 'model', preserveDrawingBuffer: true});  // points need no MSAA (costly in software GL)
+  } catch (error) {
+    window.quadrixErrors.length = errorsBefore;  // three.js logged the failure; it is reported below instead
+    if (errorsBefore === 0) {
+      document.body.removeAttribute('data-error');
+      document.title = 'quadrix view';
+      var banner = document.getElementById('page-error');
+      if (banner) banner.parentNode.removeChild(banner);
+    }
+    document.body.setAttribute('data-webgl', 'missing');
+    viewElement.appendChild(el('div', {id: 'no-webgl'}, [
+      'No 3D view: this browser could not create a WebGL context (' + ((error && error.message) || error) + ').\n' +
+      'Turn on WebGL or hardware acceleration, or open the page in another browser. The report is in the panel.']));
+  }
   stages.push('webgl ' + performance.now().toFixed(0));
-  renderer.setPixelRatio(window.devicePixelRatio || 1);
-  renderer.setClearColor(0xffffff, 1);
-  viewElement.appendChild(renderer.domElement);
+  var canvas = renderer ? renderer.domElement : viewElement;
+  if (renderer) {
+    renderer.setPixelRatio(window.devicePixelRatio || 1);
+    renderer.setClearColor(0xffffff, 1);
+    viewElement.appendChild(renderer.domElement);
+  }
   var scene = new THREE.Scene();
   var camera = new THREE.PerspectiveCamera(45, 1, 0.05, 20000);
   camera.up.set(0, 0, 1);  // every quadrix frame is z up
-  var controls = new THREE.OrbitControls(camera, renderer.domElement);
+  var controls = new THREE.OrbitControls(camera, canvas);
   controls.screenSpacePanning = true;
   scene.add(new THREE.AmbientLight(0xffffff, 0.5));
   var sun = new THREE.DirectionalLight(0xffffff, 0.55);
@@ -120,14 +164,14 @@ const char* const kPageScript = R"JS(
   fill.position.set(-0.6, 0.5, 0.3);
   scene.add(fill);
   var frameRequested = false;
-  function render() { frameRequested = false; renderer.render(scene, camera); }
+  function render() { frameRequested = false; if (renderer) renderer.render(scene, camera); }
   function requestRender() {
     if (!frameRequested) { frameRequested = true; requestAnimationFrame(render); }
   }
   controls.addEventListener('change', requestRender);
   function resize() {
     var width = Math.max(viewElement.clientWidth, 1), height = Math.max(viewElement.clientHeight, 1);
-    renderer.setSize(width, height);
+    if (renderer) renderer.setSize(width, height);
     camera.aspect = width / height;
     camera.updateProjectionMatrix();
     requestRender();
@@ -180,15 +224,18 @@ const char* const kPageScript = R"JS(
 
   function statusBlock(status, message, note) {
     var known = ['ok', 'ambiguous', 'degenerate', 'failed'].indexOf(status) >= 0;
-    var html = '<div id="status" class="status-' + (known ? status : 'other') + '">status: ' + escapeHtml(status) + '</div>';
-    if (message) html += '<div id="message">' + escapeHtml(message) + '</div>';
-    if (note) html += '<div class="note">' + escapeHtml(note) + '</div>';
-    return html;
+    return [el('div', {id: 'status', 'class': 'status-' + (known ? status : 'other')}, ['status: ' + status]),
+            message ? el('div', {id: 'message'}, [message]) : null, note ? el('div', {'class': 'note'}, [note]) : null];
   }
   function table(rows) {
-    return '<table>' + rows.map(function (row) {
-      return '<tr><td>' + escapeHtml(row[0]) + '</td><td class="n">' + row[1] + '</td></tr>';
-    }).join('') + '</table>';
+    return el('table', {}, rows.map(function (row) { return el('tr', {}, [el('td', {}, [row[0]]), el('td', {'class': 'n'}, [row[1]])]); }));
+  }
+  function appendAll(parent, children) {
+    children.forEach(function (child) {
+      if (child === null || child === undefined) return;
+      if (Array.isArray(child)) appendAll(parent, child);
+      else parent.appendChild(typeof child === 'object' ? child : document.createTextNode(String(child)));
+    });
   }
 
   // ---- registration page ----
@@ -255,36 +302,37 @@ const char* const kPageScript = R"JS(
     }
 
     var counts = report.counts || {}, timings = report.timings_ms || {};
-    var html = '<h1>' + escapeHtml(data.title) + '</h1>' + statusBlock(report.status, report.message, data.note);
-    html += '<div><button id="show-aligned">source aligned</button><button id="show-scanned">source as scanned</button>' +
-            '<button id="show-answer">reported answer</button><label class="toggle" style="display:inline"><input type="checkbox" id="lines" checked> lines</label></div>';
-    html += '<div>showing: <span id="shown"></span></div>';
-    html += '<div><span class="swatch" style="background:#9a9a9a"></span>target (' + (data.target_total || 0) + ' points)' +
-            ' <span class="swatch" style="background:#ff7800"></span>source (' + (data.source_total || 0) + ')' +
-            ' <span class="swatch" style="background:#0a8a2a"></span>clique</div>';
-    if (report.ground_truth)
-      html += '<h2>Ground truth</h2>' + table([['RTE (m)', number(report.ground_truth.rte_m)], ['RRE (deg)', number(report.ground_truth.rre_deg)],
-                                               ['success', report.ground_truth.success ? 'yes' : 'no']]);
-    html += '<h2>Candidates (click one to apply it)</h2><table><tr><th>#</th><th>δm</th><th>|I*|</th><th>refine</th><th>score</th></tr>';
+    var candidateRows = [el('tr', {}, ['#', 'δm', '|I*|', 'refine', 'score'].map(function (h) { return el('th', {}, [h]); }))];
     candidates.forEach(function (c, i) {
-      html += '<tr class="candidate' + (i === winner ? ' winner' : '') + '" data-index="' + i + '" title="' + escapeHtml(c.note || '') + '">' +
-              '<td>' + i + '</td><td class="n">' + number(c.threshold_m, 1) + '</td><td class="n">' + c.clique_size + '</td><td>' +
-              escapeHtml(c.refinement_status) + (c.valid ? '' : ' (invalid)') + '</td><td class="n">' + number(c.score, 4) + '</td></tr>';
+      candidateRows.push(el('tr', {'class': 'candidate' + (i === winner ? ' winner' : ''), 'data-index': i, title: c.note || ''}, [
+        el('td', {}, [i]), el('td', {'class': 'n'}, [number(c.threshold_m, 1)]), el('td', {'class': 'n'}, [number(c.clique_size, 0)]),
+        el('td', {}, [String(c.refinement_status) + (c.valid ? '' : ' (invalid)')]), el('td', {'class': 'n'}, [number(c.score, 4)])]));
     });
-    html += '</table>';
-    if (report.best_to_second_ratio !== null && report.best_to_second_ratio !== undefined)
-      html += '<div>best / second score: ' + number(report.best_to_second_ratio) + '</div>';
-    html += '<h2>Timings (ms)</h2>' + table(Object.keys(timings).map(function (k) { return [k, number(timings[k], 1)]; }));
-    html += '<h2>Counts</h2>' + table(Object.keys(counts).map(function (k) {
-      return [k, Array.isArray(counts[k]) ? counts[k].join(' / ') : number(counts[k], 0)];
-    }));
-    if (report.overlap)
-      html += '<h2>Overlap</h2>' + table([['answer', number(report.overlap.transformed)], ['unmoved', number(report.overlap.identity)],
-                                          ['distance (m)', number(report.overlap.distance_m, 2)]]);
-    if (report.input)
-      html += '<h2>Input</h2>' + table([['source', escapeHtml(report.input.source)], ['target', escapeHtml(report.input.target)],
-                                        ['presets', escapeHtml(report.input.source_preset + ' / ' + report.input.target_preset)]]);
-    panel.innerHTML = html;
+    var lineToggle = el('input', {type: 'checkbox', id: 'lines', checked: ''});
+    appendAll(panel, [
+      el('h1', {}, [data.title]), statusBlock(report.status, report.message, data.note),
+      el('div', {}, [el('button', {id: 'show-aligned'}, ['source aligned']), el('button', {id: 'show-scanned'}, ['source as scanned']),
+                     el('button', {id: 'show-answer'}, ['reported answer']),
+                     el('label', {'class': 'toggle', style: 'display:inline'}, [lineToggle, ' lines'])]),
+      el('div', {}, ['showing: ', el('span', {id: 'shown'})]),
+      el('div', {}, [swatch('#9a9a9a'), 'target (' + number(data.target_total || 0, 0) + ' points) ', swatch('#ff7800'),
+                     'source (' + number(data.source_total || 0, 0) + ') ', swatch('#0a8a2a'), 'clique']),
+      report.ground_truth ? [el('h2', {}, ['Ground truth']),
+                             table([['RTE (m)', number(report.ground_truth.rte_m)], ['RRE (deg)', number(report.ground_truth.rre_deg)],
+                                    ['success', report.ground_truth.success ? 'yes' : 'no']])] : null,
+      el('h2', {}, ['Candidates (click one to apply it)']), el('table', {}, candidateRows),
+      report.best_to_second_ratio !== null && report.best_to_second_ratio !== undefined
+          ? el('div', {}, ['best / second score: ' + number(report.best_to_second_ratio)]) : null,
+      el('h2', {}, ['Timings (ms)']), table(Object.keys(timings).map(function (k) { return [k, number(timings[k], 1)]; })),
+      el('h2', {}, ['Counts']), table(Object.keys(counts).map(function (k) {
+        return [k, Array.isArray(counts[k]) ? counts[k].map(String).join(' / ') : number(counts[k], 0)];
+      })),
+      report.overlap ? [el('h2', {}, ['Overlap']),
+                        table([['answer', number(report.overlap.transformed)], ['unmoved', number(report.overlap.identity)],
+                               ['distance (m)', number(report.overlap.distance_m, 2)]])] : null,
+      report.input ? [el('h2', {}, ['Input']),
+                      table([['source', report.input.source], ['target', report.input.target],
+                             ['presets', report.input.source_preset + ' / ' + report.input.target_preset]])] : null]);
     document.getElementById('show-aligned').onclick = function () { state.aligned = true; update(); };
     document.getElementById('show-scanned').onclick = function () { state.aligned = false; update(); };
     document.getElementById('show-answer').onclick = function () { state.shown = -1; state.aligned = true; update(); };
@@ -342,35 +390,36 @@ const char* const kPageScript = R"JS(
       picked = mesh;
       if (!mesh) { pick.style.display = 'none'; requestRender(); return; }
       mesh.material.emissive.setHex(0x553300);
-      var q = mesh.userData.quadric, cells = '';
+      var q = mesh.userData.quadric, rows = [];
       for (var row = 0; row < 7; ++row) {
-        cells += '<tr>';
+        var cells = [];
         for (var col = 0; col < 3; ++col) {
           var k = row * 3 + col;
-          cells += '<td>' + recordNames[k] + '</td><td class="n">' + number(q.record[k], 4) + '</td>';
+          cells.push(el('td', {}, [recordNames[k]]), el('td', {'class': 'n'}, [number(q.record[k], 4)]));
         }
-        cells += '</tr>';
+        rows.push(el('tr', {}, cells));
       }
-      pick.innerHTML = '<b>quadric ' + q.index + '</b>: ' + escapeHtml(q.type) + ', class ' + escapeHtml(q.class) + ', ' + q.points +
-                       ' points<br>21-number record (paper Struct. 1):<table>' + cells + '</table>';
+      pick.textContent = '';
+      appendAll(pick, [el('b', {}, ['quadric ' + q.index]), ': ' + q.type + ', class ' + q.class + ', ' + q.points + ' points', el('br'),
+                  '21-number record (paper Struct. 1):', el('table', {}, rows)]);
       pick.style.display = 'block';
       requestRender();
     }
-    var html = '<h1>' + escapeHtml(data.title) + '</h1>' + statusBlock(data.status, data.message, '');
-    html += table(data.facts.map(function (f) { return [f[0], escapeHtml(f[1])]; }));
-    html += '<div>' + data.quadrics.length + ' quadrics; click one for its record</div>';
-    html += '<h2>Types</h2>';
-    Object.keys(typeCount).sort().forEach(function (t) {
-      html += '<label class="toggle"><input type="checkbox" data-type="' + escapeHtml(t) + '" checked><span class="swatch" style="background:' +
-              rgb(typeColour[t]) + '"></span>' + escapeHtml(t) + ' (' + typeCount[t] + ')</label>';
+    var typeToggles = Object.keys(typeCount).sort().map(function (t) {
+      return el('label', {'class': 'toggle'}, [el('input', {type: 'checkbox', 'data-type': t, checked: ''}), swatch(rgb(typeColour[t])),
+                                               t + ' (' + typeCount[t] + ')']);
     });
-    html += '<h2>Classes</h2>';
-    Object.keys(classCount).sort().forEach(function (c) {
-      html += '<label class="toggle"><input type="checkbox" data-class="' + escapeHtml(c) + '" checked>' + escapeHtml(c) + ' (' + classCount[c] + ')</label>';
+    var classToggles = Object.keys(classCount).sort().map(function (c) {
+      return el('label', {'class': 'toggle'}, [el('input', {type: 'checkbox', 'data-class': c, checked: ''}), c + ' (' + classCount[c] + ')']);
     });
-    html += '<h2>Points</h2><label class="toggle"><input type="checkbox" id="points"' + (cloud ? ' checked' : ' disabled') + '> points (' +
-            (pointPositions.length / 3) + ' shown of ' + (data.points_total || 0) + ')</label>';
-    panel.innerHTML = html;
+    var pointsToggle = el('input', cloud ? {type: 'checkbox', id: 'points', checked: ''} : {type: 'checkbox', id: 'points', disabled: ''});
+    appendAll(panel, [
+      el('h1', {}, [data.title]), statusBlock(data.status, data.message, ''),
+      table((data.facts || []).map(function (f) { return [f[0], f[1]]; })),
+      el('div', {}, [data.quadrics.length + ' quadrics; click one for its record']),
+      el('h2', {}, ['Types']), typeToggles, el('h2', {}, ['Classes']), classToggles,
+      el('h2', {}, ['Points']),
+      el('label', {'class': 'toggle'}, [pointsToggle, ' points (' + (pointPositions.length / 3) + ' shown of ' + number(data.points_total || 0, 0) + ')'])]);
     Array.prototype.forEach.call(panel.querySelectorAll('input[data-type]'), function (box) {
       box.onchange = function () { typeOn[box.getAttribute('data-type')] = box.checked; applyVisibility(); };
     });
@@ -380,10 +429,10 @@ const char* const kPageScript = R"JS(
     document.getElementById('points').onchange = applyVisibility;
     // A click (not a drag) picks the nearest visible quadric under the pointer.
     var raycaster = new THREE.Raycaster(), down = null;
-    renderer.domElement.addEventListener('pointerdown', function (event) { down = [event.clientX, event.clientY]; });
-    renderer.domElement.addEventListener('pointerup', function (event) {
+    canvas.addEventListener('pointerdown', function (event) { down = [event.clientX, event.clientY]; });
+    canvas.addEventListener('pointerup', function (event) {
       if (!down || Math.hypot(event.clientX - down[0], event.clientY - down[1]) > 4) return;
-      var box = renderer.domElement.getBoundingClientRect();
+      var box = canvas.getBoundingClientRect();
       var ndc = new THREE.Vector2(((event.clientX - box.left) / box.width) * 2 - 1, -((event.clientY - box.top) / box.height) * 2 + 1);
       raycaster.setFromCamera(ndc, camera);
       var hits = raycaster.intersectObjects(meshes.filter(function (m) { return m.visible; }));
@@ -410,12 +459,13 @@ const char* const kPageScript = R"JS(
   stages.push('scene ' + performance.now().toFixed(0));
   resize();
   render();  // the first frame, drawn before the page reports itself ready
-  renderer.getContext().finish();  // drawn, not only queued
+  if (renderer) renderer.getContext().finish();  // drawn, not only queued
   var ready = performance.now();
   stages.push('frame ' + ready.toFixed(0));
   document.body.setAttribute('data-stages', stages.join(', '));
   document.body.setAttribute('data-ready-ms', ready.toFixed(0));
-  if (!document.body.hasAttribute('data-error')) document.title = 'quadrix view ready ' + ready.toFixed(0) + ' ms';
+  if (!document.body.hasAttribute('data-error'))
+    document.title = 'quadrix view ready ' + ready.toFixed(0) + ' ms' + (renderer ? '' : ' (no WebGL: panel only)');
 })();
 )JS";
 

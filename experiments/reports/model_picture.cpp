@@ -1,5 +1,6 @@
 // Z-buffer rasteriser for model pictures (see model_picture.h).
 #include "experiments/reports/model_picture.h"
+#include "experiments/reports/picture_text.h"
 
 #include "geometry/constants.h"
 #include "geometry/error.h"
@@ -46,10 +47,12 @@ struct MeshCamera {
   int width = 0, height = 0;               // supersampled image size
 };
 
-/// Aims at the vertices' bounding-box centre from azimuth/elevation so the bounding sphere spans the shorter side.
+/// Aims at the frame box's (or the vertices' bounding box's) centre from azimuth/elevation so the bounding sphere spans the shorter side.
 MeshCamera frame_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options) {
   MeshCamera camera;
-  const Eigen::Vector3d lower = mesh.vertices.rowwise().minCoeff(), upper = mesh.vertices.rowwise().maxCoeff();
+  const bool boxed = !options.frame_box.isEmpty();
+  const Eigen::Vector3d lower = boxed ? options.frame_box.min() : Eigen::Vector3d(mesh.vertices.rowwise().minCoeff());
+  const Eigen::Vector3d upper = boxed ? options.frame_box.max() : Eigen::Vector3d(mesh.vertices.rowwise().maxCoeff());
   const Eigen::Vector3d centre = 0.5 * (lower + upper);
   const double radius = std::max(1e-6, 0.5 * (upper - lower).norm()) / options.zoom;
   const Eigen::Vector3d up = options.up.normalized();
@@ -205,7 +208,15 @@ void write_rgb_png(const std::string& path, const RgbImage& image) {
 }
 
 void write_mesh_picture(const std::string& path, const TriangleMesh& mesh, const MeshPictureOptions& options) {
-  write_rgb_png(path, render_mesh(mesh, options));
+  RgbImage image = render_mesh(mesh, options);
+  if (!options.legend.empty()) {
+    std::vector<LegendEntry> entries;
+    for (const auto& [color, label] : options.legend) entries.push_back({color, label});
+    const double text_height = std::max(11.0, std::min(image.width, image.height) / 55.0);
+    const int margin = std::min(image.width, image.height) / 40;
+    draw_picture_legend(image, margin, margin, options.title, entries, text_height);
+  }
+  write_rgb_png(path, image);
 }
 
 }  // namespace quadrix

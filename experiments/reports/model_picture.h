@@ -6,10 +6,13 @@
 #include "geometry/mesh.h"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <array>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace quadrix {
 
@@ -24,6 +27,9 @@ struct MeshPictureOptions {
   int supersampling = 2;             ///< rendered at this factor and box-filtered down (1..4), for smooth edges
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  ///< up axis of the mesh
   std::array<std::uint8_t, 3> background = {255, 255, 255};  ///< colour where no triangle is drawn
+  Eigen::AlignedBox3d frame_box;     ///< the box the camera frames (empty: every vertex), e.g. the structures without the ground
+  std::vector<std::pair<std::array<std::uint8_t, 3>, std::string>> legend;  ///< colour and label per row, drawn top left by write_mesh_picture (empty: none)
+  std::string title;                 ///< first line of the legend box (e.g. the input file)
 };
 
 /// An RGB image, row-major from the top-left, 3 bytes a pixel.
@@ -34,7 +40,7 @@ struct RgbImage {
 };
 
 /// Rasterises `mesh` (per-vertex colours, grey when absent) as seen from the options' camera, which
-/// frames the bounding sphere of the vertices. Throws quadrix::Error for an empty mesh or options
+/// frames the bounding sphere of options.frame_box (of the vertices when it is empty). Throws quadrix::Error for an empty mesh or options
 /// out of range (naming the option).
 RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options = {});
 
@@ -42,7 +48,7 @@ RgbImage render_mesh(const TriangleMesh& mesh, const MeshPictureOptions& options
 /// naming the path when the image is inconsistent or encoding fails. Any PNG writer can share it.
 void write_rgb_png(const std::string& path, const RgbImage& image);
 
-/// render_mesh, then write_rgb_png.
+/// render_mesh, the legend of options.legend (with options.title) in the top-left corner, then write_rgb_png.
 void write_mesh_picture(const std::string& path, const TriangleMesh& mesh, const MeshPictureOptions& options = {});
 
 }  // namespace quadrix

@@ -2,6 +2,7 @@
 #include "experiments/reports/registration_report.h"
 
 #include "experiments/reports/model_picture.h"
+#include "experiments/reports/picture_text.h"
 
 #include "geometry/error.h"
 #include "geometry/io.h"
@@ -253,9 +254,16 @@ BirdsEyeFrame birds_eye_frame(const PointCloud& source, const PointCloud& target
   };
   const Eigen::Vector2d low(percentile(xs, 0.02), percentile(ys, 0.02));
   const Eigen::Vector2d high(percentile(xs, 0.98), percentile(ys, 0.98));
-  frame.centre = 0.5 * (low + high);
+  frame.center = 0.5 * (low + high);
   frame.half_extent = std::clamp(0.55 * (high - low).maxCoeff(), 5.0, 200.0);  // scale bar >= 2 m: whole metres
   return frame;
+}
+
+PictureColor status_picture_color(const std::string& status) {
+  if (status == "ok") return {205, 236, 205};
+  if (status == "ambiguous") return {246, 227, 168};
+  if (status == "degenerate" || status == "failed") return {243, 192, 192};
+  return {221, 228, 238};
 }
 
 void write_birds_eye_png(const std::string& path, const PointCloud& source, const PointCloud& target,
@@ -268,18 +276,14 @@ void write_birds_eye_png(const std::string& path, const PointCloud& source, cons
   canvas.size = options.image_size;
   canvas.pixels.assign(3 * static_cast<std::size_t>(canvas.size) * static_cast<std::size_t>(canvas.size), 255);
   const double pixels_per_metre = canvas.size / (2.0 * half_extent);
-  const auto plot = [&](const Eigen::Vector3d& p, std::array<std::uint8_t, 3> color) {
+  const auto pixel_x = [&](double x) { return static_cast<int>(std::floor((x - frame.center.x() + half_extent) * pixels_per_metre)); };
+  const auto pixel_y = [&](double y) { return static_cast<int>(std::floor((half_extent - y + frame.center.y()) * pixels_per_metre)); };
+  const auto plot = [&](const Eigen::Vector3d& p, PictureColor color) {
     if (options.max_height > 0.0 && p.z() > options.max_height) return;
-    canvas.set(static_cast<int>(std::floor((p.x() - frame.centre.x() + half_extent) * pixels_per_metre)),
-               static_cast<int>(std::floor((half_extent - p.y() + frame.centre.y()) * pixels_per_metre)), color);
+    canvas.set(pixel_x(p.x()), pixel_y(p.y()), color);
   };
-  for (std::size_t i = 0; i < target.size(); ++i) plot(target.point(i), {150, 150, 150});
-  for (std::size_t i = 0; i < source.size(); ++i) plot(transform * source.point(i), {235, 100, 0});
-  // Target origin cross (may lie outside the framed scene).
-  const int origin_x = static_cast<int>(std::floor((half_extent - frame.centre.x()) * pixels_per_metre));
-  const int origin_y = static_cast<int>(std::floor((half_extent + frame.centre.y()) * pixels_per_metre));
-  canvas.fill(origin_x - 6, origin_y - 1, origin_x + 6, origin_y + 1, {0, 0, 200});
-  canvas.fill(origin_x - 1, origin_y - 6, origin_x + 1, origin_y + 6, {0, 0, 200});
+  for (std::size_t i = 0; i < target.size(); ++i) plot(target.point(i), kBirdsEyeTargetColor);
+  for (std::size_t i = 0; i < source.size(); ++i) plot(transform * source.point(i), kBirdsEyeSourceColor);
   // Scale bar: the largest of 1/2/5 x 10^k metres not longer than a fifth of the image.
   const double longest = 0.2 * 2.0 * half_extent;
   double bar = std::pow(10.0, std::floor(std::log10(longest)));
@@ -295,10 +299,43 @@ void write_birds_eye_png(const std::string& path, const PointCloud& source, cons
   canvas.fill(margin, base - thickness, margin + bar_pixels, base, {0, 0, 0});
   canvas.fill(margin, base - 4 * thickness, margin + thickness - 1, base, {0, 0, 0});
   canvas.fill(margin + bar_pixels - thickness + 1, base - 4 * thickness, margin + bar_pixels, base, {0, 0, 0});
-  const int glyph_scale = std::max(2, canvas.size / 256);
-  canvas.text(margin, base - 4 * thickness - 7 * glyph_scale, std::to_string(static_cast<long long>(std::lround(bar))) + "m",
-              glyph_scale, {0, 0, 0});
-  write_rgb_png(path, RgbImage{canvas.size, canvas.size, std::move(canvas.pixels)});
+  const std::string bar_label = std::to_string(static_cast<long long>(std::lround(bar))) + " m";
+  RgbImage image{canvas.size, canvas.size, std::move(canvas.pixels)};
+  const double text_height = std::max(11.0, canvas.size / 64.0);
+  if (picture_font_available()) {
+    draw_picture_text(image, margin, base - 4 * thickness - static_cast<int>(1.3 * text_height), bar_label, text_height, {0, 0, 0});
+  } else {
+    canvas.pixels = std::move(image.pixels);  // no font: the scale bar's digits from the built-in glyphs
+    canvas.text(margin, base - 4 * thickness - 7 * std::max(2, canvas.size / 256), bar_label, std::max(2, canvas.size / 256), {0, 0, 0});
+    image.pixels = std::move(canvas.pixels);
+  }
+  // The sensors (clouds are sensor-centred: the target's at its origin, the source's where the
+  // answer puts it), each a labelled cross.
+  const int arm = std::max(6, canvas.size / 110);
+  const int width = std::max(3, canvas.size / 340);
+  const Eigen::Vector3d source_sensor = transform.translation();
+  draw_picture_cross(image, pixel_x(0.0), pixel_y(0.0), arm, width, kBirdsEyeTargetSensorColor);
+  draw_picture_cross(image, pixel_x(source_sensor.x()), pixel_y(source_sensor.y()), arm, width, kBirdsEyeSourceSensorColor);
+  draw_picture_text(image, pixel_x(0.0) + arm + 3, pixel_y(0.0) + 2, "target sensor", 0.85 * text_height, kBirdsEyeTargetSensorColor);
+  draw_picture_text(image, pixel_x(source_sensor.x()) + arm + 3, pixel_y(source_sensor.y()) - static_cast<int>(text_height),
+                    "source sensor", 0.85 * text_height, kBirdsEyeSourceSensorColor);
+  // The status along the top (its colour as on the page: an ambiguous answer never looks like an
+  // ok one), then the legend below it.
+  int legend_top = margin;
+  if (!options.status.empty()) {
+    std::string banner = "status: " + options.status;
+    if (options.status == "ambiguous") banner += " (not trusted: another placement fits about as well)";
+    else if (options.status != "ok") banner += " (no trusted answer)";
+    if (!options.title.empty()) banner += "   " + options.title;
+    legend_top = draw_picture_banner(image, banner, status_picture_color(options.status), 1.15 * text_height).y1 + margin / 2;
+  }
+  draw_picture_legend(image, margin, legend_top, "",
+                      {{kBirdsEyeTargetColor, "target"},
+                       {kBirdsEyeSourceColor, "source, moved by the answer"},
+                       {kBirdsEyeTargetSensorColor, "target sensor", true},
+                       {kBirdsEyeSourceSensorColor, "source sensor (answer)", true}},
+                      text_height);
+  write_rgb_png(path, image);
 }
 
 }  // namespace quadrix

@@ -9,6 +9,8 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -62,11 +64,23 @@ struct BirdsEyeOptions {
   int image_size = 1024;        ///< width = height of the square image, pixels
   double half_extent = 0.0;     ///< half side of the pictured square around the target origin, m (0: framed on both clouds, see birds_eye_frame)
   double max_height = 0.0;      ///< points higher than this above the target origin are left out, m (0: keep all); roofs hide streets
+  std::string status;           ///< the registration's status, shown in a banner coloured by it ("" : no banner)
+  std::string title;            ///< short text after the status in the banner (e.g. the two file names)
 };
+
+/// Colours of the bird's-eye picture and its legend.
+inline constexpr std::array<std::uint8_t, 3> kBirdsEyeTargetColor{150, 150, 150};        ///< target points
+inline constexpr std::array<std::uint8_t, 3> kBirdsEyeSourceColor{235, 100, 0};          ///< moved source points
+inline constexpr std::array<std::uint8_t, 3> kBirdsEyeTargetSensorColor{0, 0, 200};      ///< target sensor cross
+inline constexpr std::array<std::uint8_t, 3> kBirdsEyeSourceSensorColor{130, 0, 130};    ///< source sensor cross (where the answer puts it)
+
+/// Background of the bird's-eye status banner: ok green, ambiguous amber, degenerate and failed
+/// red, anything else blue-grey (the page's status colours).
+std::array<std::uint8_t, 3> status_picture_color(const std::string& status);
 
 /// The square a bird's-eye picture shows: centre (x, y) and half side, m.
 struct BirdsEyeFrame {
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  ///< centre of the pictured square, target frame, m
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();  ///< center of the pictured square, target frame, m
   double half_extent = 50.0;                         ///< half side of the pictured square, m
 };
 
@@ -78,7 +92,9 @@ BirdsEyeFrame birds_eye_frame(const PointCloud& source, const PointCloud& target
                               const BirdsEyeOptions& options = {});
 
 /// Writes a PNG seen from above (x right, y up): white background, target grey, transformed source
-/// orange, a scale bar with its length in metres (bottom left), the target origin as a cross. Atomic.
+/// orange, both sensors as labelled crosses (target at its origin, source where the answer puts
+/// it), a legend of these colours (top left), a banner with options.status coloured by it, and a
+/// scale bar with its length in metres (bottom left). Atomic.
 void write_birds_eye_png(const std::string& path, const PointCloud& source, const PointCloud& target,
                          const Eigen::Isometry3d& transform, const BirdsEyeOptions& options = {});
 

@@ -182,13 +182,13 @@ void bind_config(py::module_& module) {
   module.def(
       "config",
       [](const std::string& preset, const py::object& cloud, const py::object& config, const std::string& side) {
-        if (preset == "auto" && cloud.is_none())
-          throw py::value_error("config: preset 'auto' measures a cloud: pass cloud=..., or name a preset");
         std::shared_ptr<Cloud> holder;
         const PointCloud empty;
         const PointCloud& measured = cloud.is_none() ? empty : cloud_from_object(cloud, "cloud", holder);
+        // auto without a cloud (as bare `quadrix config`): the defaults auto starts from.
+        const std::string resolved = preset == "auto" && cloud.is_none() ? guess_sensor_preset(empty).preset : preset;
         const RegistrationOptions options =
-            registration_options_from(preset, measured, preset, measured, config, py::none(), nullptr);
+            registration_options_from(resolved, measured, resolved, measured, config, py::none(), nullptr);
         return config_dict(options, side);
       },
       py::arg("preset") = "auto", py::arg("cloud") = py::none(), py::arg("config") = py::none(),
@@ -197,8 +197,9 @@ The effective registration options as a plain dict in the YAML schema (what ``qu
 prints): nested dicts of every key of ``config_keys()``, e.g.
 ``config("vlp16")["extraction"]["planes"]["voxel_size"]``.
 
-preset: vlp64, vlp16, mid360, avia, monument, or auto (then ``cloud`` is required: a Cloud, an
-(N, 3) array or a path, measured as ``quadrix config CLOUD --preset auto`` does).
+preset: vlp64, vlp16, mid360, avia, monument, or auto (the default of ``register`` and ``model``):
+measured on ``cloud`` (a Cloud, an (N, 3) array or a path) as ``quadrix config CLOUD`` does; without
+a cloud, the defaults auto starts from (as bare ``quadrix config``).
 config: overrides applied after the preset: a dict in the same schema or a YAML file path.
 side: "source" or "target", which side's per-side keys (sensor, extraction.*) to report.
 

@@ -7,6 +7,7 @@
 #include "estimation/registration_config.h"
 #include "fitting/quadric_fitter.h"
 #include "fitting/scene_modelling.h"
+#include "fitting/shape_parameters.h"
 #include "geometry/error.h"
 #include "geometry/quadric.h"
 
@@ -31,8 +32,9 @@ py::array_t<double> record_rows(const SceneModel& model, std::size_t begin, std:
 
 
 // The dict `quadrix fit` prints as JSON: the same fit_report_json, parsed.
-py::object fit_dict(const QuadricFit& fit, const std::string& fitter_name, std::size_t point_count) {
-  return json_loads(fit_report_json(fit, fitter_name, point_count, -1));
+py::object fit_dict(const QuadricFit& fit, const std::string& fitter_name, std::size_t point_count,
+                    const Eigen::Matrix3Xd& points) {
+  return json_loads(fit_report_json(fit, fitter_name, point_count, -1, points));
 }
 
 }  // namespace
@@ -52,7 +54,7 @@ Returned by ``model`` and ``load_model``; ``RegistrationResult.source_model`` / 
               const auto values = r.to_array();
               std::copy(values.begin(), values.end(), out);
             });
-          }, "(M, 21) float64: the records in Struct. 1 order [label, q(10), scale(3), quaternion w x y z(4), centre(3)].")
+          }, "(M, 21) float64: the records in Struct. 1 order [label, q(10), scale(3), quaternion w x y z(4), center(3)].")
       .def_property_readonly("labels", [](const Model& m) {
             py::array_t<std::uint32_t> labels(static_cast<py::ssize_t>(m.model.size()));
             for (std::size_t i = 0; i < m.model.size(); ++i) labels.mutable_at(i) = m.model.records[i].label;
@@ -84,11 +86,30 @@ Returned by ``model`` and ``load_model``; ``RegistrationResult.source_model`` / 
               out[0] = r.full_rotation.w(); out[1] = r.full_rotation.x(); out[2] = r.full_rotation.y(); out[3] = r.full_rotation.z();
             });
           }, "(M, 4) float64: full rotation eta_f as a unit quaternion (w, x, y, z).")
+      .def_property_readonly("rotation_matrix", [](const Model& m) {
+            py::array_t<double> array({static_cast<py::ssize_t>(m.model.size()), py::ssize_t{3}, py::ssize_t{3}});
+            auto out = array.mutable_unchecked<3>();
+            for (std::size_t i = 0; i < m.model.size(); ++i) {
+              const Eigen::Matrix3d rotation = m.model.records[i].full_rotation.normalized().toRotationMatrix();
+              for (int row = 0; row < 3; ++row)
+                for (int column = 0; column < 3; ++column) out(static_cast<py::ssize_t>(i), row, column) = rotation(row, column);
+            }
+            return array;
+          }, "(M, 3, 3) float64: the full rotation R_f as matrices (columns: the record's axes), as model.json's rotation_matrix.")
+      .def_property_readonly("center", [](const Model& m) {
+            return record_rows(m.model, 0, m.model.size(), 3, [](const QuadricRecord& r, double* out) {
+              for (int i = 0; i < 3; ++i) out[i] = r.full_center(i);
+            });
+          }, "(M, 3) float64: full center t_f, metres (model.json's center).")
       .def_property_readonly("centre", [](const Model& m) {
             return record_rows(m.model, 0, m.model.size(), 3, [](const QuadricRecord& r, double* out) {
               for (int i = 0; i < 3; ++i) out[i] = r.full_center(i);
             });
-          }, "(M, 3) float64: full centre t_f, metres.")
+          }, "Deprecated alias of ``center`` (the spelling of every other name and key), kept for existing code.")
+      .def_property_readonly("shapes", [](const Model& m) {
+            return json_loads(scene_model_shapes_json(m.model));
+          }, "List of M dicts: the plain shape parameters of each record, as model.json's \"shape\" (plane normal, "
+             "offset; cylinder point, axis, radius; cone apex, axis, half_angle_deg; sphere center, radius; ...).")
       .def_property_readonly("point_counts", [](const Model& m) {
             return py::array_t<std::uint32_t>(static_cast<py::ssize_t>(m.model.element_point_counts.size()),
                                               m.model.element_point_counts.data());
@@ -230,18 +251,21 @@ unknown config key.
         evaluation.residuals = residual_evaluation_from_name(residuals, "residuals");
         const auto fitter = make_quadric_fitter(fitter_name, evaluation);
         QuadricFit fit;
+        const Eigen::Matrix3Xd positions = cloud.positions.cast<double>();
         {
           py::gil_scoped_release release;
-          const Eigen::Matrix3Xd positions = cloud.positions.cast<double>();
           fit = fitter->fit(positions, Eigen::Matrix3Xd(), hint);
         }
-        return fit_dict(fit, fitter->name(), cloud.size());
+        return fit_dict(fit, fitter->name(), cloud.size(), positions);
       },
       py::arg("points"), py::arg("type") = "auto", py::arg("fitter") = "statistical", py::arg("residuals") = "exact",
       R"doc(
 Fits one quadric to all points (one element) and returns what ``quadrix fit`` prints, as a dict with
-the same keys: fitter, status, message (only when not ok), type, points, q (10, normalised), scale,
-rotation (9, row-major), center, degeneracy {scale, rotation, translation}, statistical_scale,
+the same keys: fitter, status, message (only when not ok), type, points, shape (the plain parameters:
+plane normal, offset; sphere center, radius; cylinder point, axis, radius, extent, height; cone
+apex, axis, half_angle_deg, extent, height; line point, direction; ellipsoid center, radii, axes),
+q (10, normalised), scale, rotation (unit quaternion w, x, y, z, as ``Model.rotation``),
+rotation_matrix (9, row-major), center, degeneracy {scale, rotation, translation}, statistical_scale,
 statistical_center, residual_rms, residual_max, f_p2s, time_ms, residual_evaluation,
 residual_points, evaluation_ms. Numbers the CLI prints as null (NaN, e.g. with residuals="skip") are None.
 

@@ -5,7 +5,8 @@
 
 #include "geometry/error.h"
 
-PYBIND11_MODULE(quadrix, module) {
+// Built as quadrix._quadrix; the package quadrix (package/__init__.py.in) checks the interpreter, then re-exports it.
+PYBIND11_MODULE(_quadrix, module) {
   namespace py = pybind11;
   module.doc() = R"doc(
 Quadrix: quadric primitives for point-cloud modelling and global registration (QuadricsReg).

@@ -79,11 +79,17 @@ def test_bad_files_name_the_file(tmp_path):
         quadrix.config("vlp64", config=tmp_path / "absent.yaml")
 
 
-def test_unknown_preset_and_auto_without_cloud_are_value_errors():
+def test_unknown_preset_is_a_value_error():
     with pytest.raises(ValueError, match="vlp32"):
         quadrix.config("vlp32")
-    with pytest.raises(ValueError, match="auto"):
-        quadrix.config("auto")
+
+
+def test_auto_without_cloud_gives_the_defaults_it_starts_from():
+    # As bare `quadrix config`: the preset auto falls back to for a cloud with nothing to measure.
+    options = quadrix.config()
+    assert options == quadrix.config("auto")
+    assert options["sensor"] in quadrix.presets()
+    assert options == quadrix.config(options["sensor"])
 
 
 def test_auto_measures_the_cloud(street):

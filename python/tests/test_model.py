@@ -21,7 +21,7 @@ def test_the_street_model_has_ground_walls_and_poles(street_model):
     assert model.records.shape == (len(model), 21)
     np.testing.assert_array_equal(model.records[:, 0], model.labels)
     np.testing.assert_array_equal(model.records[:, 1:11], model.q)
-    np.testing.assert_array_equal(model.records[:, 18:21], model.centre)
+    np.testing.assert_array_equal(model.records[:, 18:21], model.center)
     np.testing.assert_allclose(np.linalg.norm(model.rotation, axis=1), 1.0, atol=1e-9)
     assert model.ground["found"] and model.ground["normal"][2] > 0.9
     assert model.source_points == len(quadrix.synth("street", seed=3, primitives=False)["clouds"][0])
@@ -103,7 +103,7 @@ def test_a_cloud_in_a_map_frame_is_modelled_around_its_sensor_origin(street):
     in_map_frame = quadrix.model((points + origin).astype(np.float32), preset="vlp64", sensor_origin=origin)
     assert in_map_frame.status == "ok", in_map_frame.message
     assert in_map_frame.types == in_sensor_frame.types
-    np.testing.assert_allclose(in_map_frame.centre, in_sensor_frame.centre + origin, atol=1e-6)
+    np.testing.assert_allclose(in_map_frame.center, in_sensor_frame.center + origin, atol=1e-6)
     normal = np.array(in_sensor_frame.ground["normal"])
     assert in_map_frame.ground["offset"] == pytest.approx(in_sensor_frame.ground["offset"] - normal @ origin, abs=1e-6)
     with pytest.raises(ValueError, match="sensor_origin"):

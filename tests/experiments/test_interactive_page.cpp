@@ -62,27 +62,31 @@ struct BrowserView {
   double canvas_drawn = 0.0;    ///< fraction of that part that is not the white background
 };
 
-std::string chromium_command(const fs::path& profile) {
+// `webgl` false: a browser that cannot create a WebGL context (WebGL and the 3-D APIs off, no
+// software GL), as a locked-down browser or a remote desktop without GPU.
+std::string chromium_command(const fs::path& profile, bool webgl = true) {
   return std::string(kChromium) +
-         " --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader --disable-quic --no-first-run"
+         (webgl ? " --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader"
+                : " --headless --no-sandbox --disable-gpu --disable-webgl --disable-3d-apis") +
+         " --disable-quic --no-first-run"
          " --disable-background-networking --disable-component-update --disable-sync --enable-logging=stderr --v=0"
          " --window-size=1280,800 --user-data-dir='" + profile.string() + "'";
 }
 
 // Opens `page` (with an optional "#..." fragment) twice in fresh profiles: once dumping the DOM, once
 // taking a 1280x800 screenshot.
-BrowserView open_in_browser(const fs::path& page, const std::string& fragment = "") {
+BrowserView open_in_browser(const fs::path& page, const std::string& fragment = "", bool webgl = true) {
   const fs::path work = fresh_directory("browser");
   const std::string url = "'file://" + fs::absolute(page).string() + fragment + "'";
   BrowserView view;
   const fs::path dom_path = work / "dom.html", dom_log = work / "dom.log";
-  EXPECT_EQ(std::system(("timeout 120 " + chromium_command(work / "profile_dom") + " --dump-dom " + url + " > '" +
+  EXPECT_EQ(std::system(("timeout 120 " + chromium_command(work / "profile_dom", webgl) + " --dump-dom " + url + " > '" +
                          dom_path.string() + "' 2> '" + dom_log.string() + "'").c_str()),
             0)
       << read_text(dom_log);
   view.dom = read_text(dom_path);
   const fs::path shot = work / "shot.png", shot_log = work / "shot.log";
-  EXPECT_EQ(run("timeout 120 " + chromium_command(work / "profile_shot") + " --screenshot='" + shot.string() + "' " + url, shot_log), 0)
+  EXPECT_EQ(run("timeout 120 " + chromium_command(work / "profile_shot", webgl) + " --screenshot='" + shot.string() + "' " + url, shot_log), 0)
       << read_text(shot_log);
   std::istringstream lines(read_text(dom_log) + read_text(shot_log));
   for (std::string line; std::getline(lines, line);)
@@ -238,6 +242,104 @@ TEST_F(InteractivePage, TheHarnessSeesAJavaScriptError) {
   EXPECT_FALSE(view.error.empty());
   EXPECT_LT(view.ready_ms, 0.0);
   EXPECT_NE(view.console.find("Uncaught"), std::string::npos) << view.console;
+}
+
+TEST_F(InteractivePage, WithoutWebGlThePageSaysSoAndStillShowsThePanel) {
+  const fs::path folder = directory_ / "register";
+  const BrowserView view = open_in_browser(folder / "view.html", "", false);
+  EXPECT_TRUE(view.error.empty()) << "a missing WebGL context is reported in the page, not as a script error: " << view.error;
+  // Visible text in the view, the whole panel, and a page that still reports itself ready.
+  EXPECT_NE(view.dom.find("id=\"no-webgl\""), std::string::npos) << view.dom.substr(0, 3000);
+  EXPECT_NE(view.dom.find("could not create a WebGL context"), std::string::npos);
+  EXPECT_NE(view.dom.find(">status: " + report_status(folder) + "</div>"), std::string::npos) << "panel missing";
+  EXPECT_NE(view.dom.find("Candidates (click one to apply it)"), std::string::npos);
+  EXPECT_NE(view.dom.find("(no WebGL: panel only)"), std::string::npos);
+  EXPECT_GE(view.ready_ms, 0.0);
+  // The model page too.
+  const fs::path json = directory_ / "model_no_webgl.json";
+  ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " model '" + scan_.string() + "' --out '" + json.string() + "'",
+                directory_ / "model_no_webgl.log"),
+            0)
+      << read_text(directory_ / "model_no_webgl.log");
+  const BrowserView model_view = open_in_browser(directory_ / "model_no_webgl.html", "", false);
+  EXPECT_TRUE(model_view.error.empty()) << model_view.error;
+  EXPECT_NE(model_view.dom.find("could not create a WebGL context"), std::string::npos);
+  EXPECT_NE(model_view.dom.find(">status: ok</div>"), std::string::npos);
+}
+
+TEST_F(InteractivePage, StringsFromACraftedReportAreShownAsTextAndNeverRun) {
+  // report.json with markup in every place the panel shows: counts arrays, a candidate's clique
+  // size, status, message, input names. The page must show them as text and run none of them.
+  const fs::path folder = directory_ / "crafted";
+  fs::create_directories(folder);
+  for (const char* name : {"merged.ply", "source_model.json", "target_model.json"})
+    fs::copy_file(directory_ / "register" / name, folder / name);
+  nlohmann::json report = nlohmann::json::parse(read_text(directory_ / "register" / "report.json"));
+  const std::string attack = "<img src=x onerror=\"document.body.setAttribute('data-pwned','1')\">";
+  report["counts"]["clique_sizes"] = nlohmann::json::array({attack});
+  report["candidates"][0]["clique_size"] = attack;
+  report["candidates"][0]["refinement_status"] = attack;
+  report["message"] = std::string("</script><script>document.body.setAttribute('data-pwned','2')</script>") + attack;
+  report["input"]["source"] = attack;
+  std::ofstream(folder / "report.json") << report.dump(2);
+  const fs::path page = directory_ / "crafted.html";
+  ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " view '" + folder.string() + "' --out '" + page.string() + "'", directory_ / "view.log"), 0)
+      << read_text(directory_ / "view.log");
+  // The embedded JSON cannot close its script element: no '<' of the data survives as a byte.
+  EXPECT_EQ(read_text(page).find("<img"), std::string::npos);
+  const BrowserView view = open_in_browser(page);
+  EXPECT_EQ(view.dom.find("data-pwned=\""), std::string::npos) << "script from report.json ran";
+  EXPECT_EQ(view.dom.find("<img"), std::string::npos) << "markup from report.json became an element";
+  EXPECT_NE(view.dom.find("&lt;img src=x onerror="), std::string::npos) << "the crafted strings are shown as text";
+  EXPECT_TRUE(view.error.empty()) << view.error;
+  EXPECT_GE(view.ready_ms, 0.0);
+}
+
+TEST_F(InteractivePage, AFileNamedLikeMarkupDoesNotBlankThePage) {
+  // "<!--<script>" in a file name would put the script parser into its escaped state and swallow
+  // the page's script if the embedded JSON kept it as is.
+  const fs::path odd = directory_ / "<!--<script>.ply";
+  fs::copy_file(scan_, odd);
+  const fs::path json = directory_ / "odd.json";
+  ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " model '" + odd.string() + "' --out '" + json.string() + "'", directory_ / "odd.log"), 0)
+      << read_text(directory_ / "odd.log");
+  expect_page_works(directory_ / "odd.html", "ok", "model page of a file named <!--<script>.ply");
+  const BrowserView view = open_in_browser(directory_ / "odd.html");
+  EXPECT_NE(view.dom.find("&lt;!--&lt;script&gt;.ply"), std::string::npos) << "the file name is shown as text";
+}
+
+TEST(InteractivePageInput, ViewReadsOnlyFilesInsideTheFolderItWasGiven) {
+  const fs::path directory = fresh_directory("outside");
+  const fs::path street = directory / "street";
+  ASSERT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " synth street --seed 3 --sensor hdl64 --out '" + street.string() + "'",
+                directory / "synth.log"),
+            0)
+      << read_text(directory / "synth.log");
+  nlohmann::json scene = nlohmann::json::parse(read_text(street / "scene.json"));
+  const std::string inside = scene["scans"][0]["cloud"].get<std::string>();
+  fs::copy_file(street / inside, directory / "elsewhere.ply");
+  for (const std::string& outside : {(directory / "elsewhere.ply").string(), std::string("../elsewhere.ply")}) {
+    scene["scans"][0]["cloud"] = outside;
+    std::ofstream(street / "scene.json") << scene.dump(2);
+    const fs::path log = directory / "view.log";
+    EXPECT_NE(run(std::string(QUADRIX_EXECUTABLE) + " view '" + street.string() + "' --out '" + (directory / "x.html").string() + "'", log), 0)
+        << outside;
+    EXPECT_NE(read_text(log).find("not a file inside the folder"), std::string::npos) << read_text(log);
+    EXPECT_FALSE(fs::exists(directory / "x.html"));
+  }
+  // A link inside the folder that leads out of it is refused too.
+  fs::create_symlink(directory / "elsewhere.ply", street / "link.ply");
+  scene["scans"][0]["cloud"] = "link.ply";
+  std::ofstream(street / "scene.json") << scene.dump(2);
+  const fs::path log = directory / "view.log";
+  EXPECT_NE(run(std::string(QUADRIX_EXECUTABLE) + " view '" + street.string() + "' --out '" + (directory / "x.html").string() + "'", log), 0);
+  EXPECT_NE(read_text(log).find("leads outside the folder"), std::string::npos) << read_text(log);
+  // The untouched description still works.
+  scene["scans"][0]["cloud"] = inside;
+  std::ofstream(street / "scene.json") << scene.dump(2);
+  EXPECT_EQ(run(std::string(QUADRIX_EXECUTABLE) + " view '" + street.string() + "' --out '" + (directory / "x.html").string() + "'", log), 0)
+      << read_text(log);
+  fs::remove_all(directory);
 }
 
 TEST(InteractivePageInput, ViewRejectsAnInputItCannotShow) {

@@ -622,8 +622,8 @@ TEST(RegistrationReport, BirdsEyePictureFramesBothCloudsWhereverTheyAre) {
   PointCloud source = target;
   source.positions = (transform.inverse().cast<float>() * target.positions).eval();
   const BirdsEyeFrame frame = birds_eye_frame(source, target, transform);
-  EXPECT_NEAR(frame.centre.x(), 200.0, 1.5);
-  EXPECT_NEAR(frame.centre.y(), -50.0, 1.5);
+  EXPECT_NEAR(frame.center.x(), 200.0, 1.5);
+  EXPECT_NEAR(frame.center.y(), -50.0, 1.5);
   EXPECT_GT(frame.half_extent, 15.0);  // the whole 30 m width fits
   EXPECT_LT(frame.half_extent, 20.0);  // and the strays do not shrink it
   // A 3 m room keeps a 5 m half side (whole-metre scale bar); a fixed half extent centres on the origin.
@@ -634,7 +634,7 @@ TEST(RegistrationReport, BirdsEyePictureFramesBothCloudsWhereverTheyAre) {
   fixed.half_extent = 30.0;
   const BirdsEyeFrame around_origin = birds_eye_frame(source, target, transform, fixed);
   EXPECT_DOUBLE_EQ(around_origin.half_extent, 30.0);
-  EXPECT_TRUE(around_origin.centre.isZero());
+  EXPECT_TRUE(around_origin.center.isZero());
 }
 
 }  // namespace
