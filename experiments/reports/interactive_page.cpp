@@ -19,11 +19,12 @@
 #include <sstream>
 
 namespace quadrix {
-namespace {
 
-using nlohmann::json;
-
-std::string read_whole_file(const std::string& path, const std::string& what) {
+std::string read_page_file(const std::string& path, const std::string& what) {
+  // A FIFO or a device would block or never end: only regular files are read.
+  std::error_code code;
+  if (std::filesystem::exists(path, code) && !std::filesystem::is_regular_file(path, code))
+    throw file_error(path, "cannot read " + what + ": not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw file_error(path, "cannot open " + what);
   std::ostringstream text;
@@ -35,13 +36,13 @@ std::string read_whole_file(const std::string& path, const std::string& what) {
 std::string read_three_js_file(const std::string& relative) {
   const std::string path = std::string(kThreeJsDirectory) + "/" + relative;
   if (!std::filesystem::exists(path))
-    throw file_error(path, "not found; the interactive page inlines three.js from Debian's libjs-three "
+    throw file_error(path, "not found; the 3-D pages inline three.js from Debian's libjs-three "
                            "(apt-get install libjs-three)");
-  return read_whole_file(path, "three.js file of libjs-three");
+  return read_page_file(path, "three.js file of libjs-three");
 }
 
 // Text inlined into a <script> element must not close it early.
-std::string escape_script_text(std::string text) {
+std::string escape_script_text(const std::string& text) {
   std::string out;
   out.reserve(text.size());
   for (std::size_t i = 0; i < text.size(); ++i) {
@@ -79,6 +80,11 @@ std::string json_for_script(const std::string& text) {
   }
   return out;
 }
+
+namespace {
+
+using nlohmann::json;
+
 
 // A file named by a folder's own description (scene.json's scans[].cloud): relative, and inside
 // the folder once links are resolved. `quadrix view DIR` reads nothing outside DIR.
@@ -413,7 +419,7 @@ RegistrationPageInput read_registration_folder(const std::string& directory) {
   if (!std::filesystem::exists(merged_path))
     throw file_error(merged_path, "not found; expected the merged cloud `quadrix register --out DIR` writes beside report.json");
   RegistrationPageInput input;
-  input.report_json = read_whole_file(report_path, "registration report");
+  input.report_json = read_page_file(report_path, "registration report");
   json report;
   try {
     report = json::parse(input.report_json);
@@ -460,7 +466,7 @@ RegistrationPageInput read_registration_folder(const std::string& directory) {
 }
 
 ModelPageInput read_model_json_page(const std::string& path) {
-  const std::string text = read_whole_file(path, "scene model JSON");
+  const std::string text = read_page_file(path, "scene model JSON");
   const SceneModel model = scene_model_from_json(text, path);
   ModelPageInput input;
   input.title = std::filesystem::path(path).filename().string();
@@ -485,8 +491,8 @@ ModelPageInput read_synthetic_folder_page(const std::string& directory) {
     if (!std::filesystem::exists(path)) throw file_error(path, "not found; expected a `quadrix synth` folder");
   json scene, primitives;
   try {
-    scene = json::parse(read_whole_file(scene_path, "synthetic scene description"));
-    primitives = json::parse(read_whole_file(primitives_path, "ground-truth primitives"));
+    scene = json::parse(read_page_file(scene_path, "synthetic scene description"));
+    primitives = json::parse(read_page_file(primitives_path, "ground-truth primitives"));
   } catch (const json::parse_error& error) {
     throw Error(directory + ": scene.json or primitives.json is not valid JSON: " + error.what());
   }

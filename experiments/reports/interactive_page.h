@@ -32,6 +32,18 @@ namespace quadrix {
 /// Where the page looks for libjs-three's files (three.min.js, examples/js/controls/OrbitControls.js).
 inline constexpr const char* kThreeJsDirectory = "/usr/share/javascript/three";
 
+/// The whole text of `path` (a page's input: a report, a model, a pose table); Error naming the file and `what`.
+std::string read_page_file(const std::string& path, const std::string& what);
+
+/// A libjs-three file under kThreeJsDirectory; Error naming it and the package when it is missing.
+std::string read_three_js_file(const std::string& relative);
+
+/// Script text with every "</" written "<\/", so it cannot close the <script> element it is inlined in.
+std::string escape_script_text(const std::string& text);
+
+/// JSON text for a <script> element: <, >, & and U+2028/U+2029 as \u escapes (no string can close the element).
+std::string json_for_script(const std::string& text);
+
 /// One quadric shown on a model page.
 struct PageQuadric {
   QuadricRecord record;                ///< paper Struct. 1 (shown on click, meshed from q)

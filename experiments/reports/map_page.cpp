@@ -21,50 +21,6 @@ namespace {
 
 using nlohmann::json;
 
-std::string read_text_file(const std::string& path, const std::string& what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw file_error(path, "cannot open " + what);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-std::string three_js_file(const std::string& relative) {
-  const std::string path = std::string(kThreeJsDirectory) + "/" + relative;
-  if (!std::filesystem::exists(path))
-    throw file_error(path, "not found; map.html inlines three.js from Debian's libjs-three (apt-get install libjs-three)");
-  return read_text_file(path, "three.js file of libjs-three");
-}
-
-// Script text (three.js, the page script) must not contain "</" that would close its element.
-std::string escape_script(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    if (text[i] == '<' && i + 1 < text.size() && text[i + 1] == '/') {
-      out += "<\\/";
-      ++i;
-    } else {
-      out += text[i];
-    }
-  }
-  return out;
-}
-
-// JSON whose '<', '>' and '&' (only possible inside strings) are \u escapes: no "</script", no "<!--".
-std::string script_safe_json(const json& data) {
-  const std::string text = data.dump(-1, ' ', false, json::error_handler_t::replace);
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    if (c == '<') out += "\\u003c";
-    else if (c == '>') out += "\\u003e";
-    else if (c == '&') out += "\\u0026";
-    else out += c;
-  }
-  return out;
-}
-
 std::string html_text(const std::string& text) {
   std::string out;
   for (const char c : text) out += c == '<' ? std::string("&lt;") : c == '&' ? std::string("&amp;") : c == '>' ? std::string("&gt;") : std::string(1, c);
@@ -134,7 +90,7 @@ json positions_of(const std::vector<MapPagePose>& poses, const std::vector<std::
 extern const char* const kMapPageScript;
 
 std::vector<MapPagePose> read_map_poses(const std::string& path) {
-  std::istringstream in(read_text_file(path, "poses"));
+  std::istringstream in(read_page_file(path, "poses"));
   std::vector<MapPagePose> poses;
   std::string line;
   std::size_t number = 0;
@@ -162,7 +118,7 @@ std::vector<MapPagePose> read_map_poses(const std::string& path) {
 }
 
 std::vector<MapPageEdge> read_map_edges(const std::string& path) {
-  std::istringstream in(read_text_file(path, "edges"));
+  std::istringstream in(read_page_file(path, "edges"));
   std::string line;
   if (!std::getline(in, line)) throw file_error(path, "empty; expected a header naming from_session, from_scan, ...");
   const std::vector<std::string> header = split_fields(line, ',');
@@ -300,8 +256,8 @@ std::string map_page_html(const MapPageInput& input) {
   }
   data["points"] = {{"origin", {low.x(), low.y(), low.z()}}, {"xyz", xyz}, {"rgb", rgb}, {"total", input.points.size()}};
 
-  const std::string three = three_js_file("three.min.js");
-  const std::string controls = three_js_file("examples/js/controls/OrbitControls.js");
+  const std::string three = read_three_js_file("three.min.js");
+  const std::string controls = read_three_js_file("examples/js/controls/OrbitControls.js");
   std::string html;
   html.reserve(three.size() + controls.size() + 8192);
   html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>quadrix map: " + html_text(input.title) +
@@ -309,13 +265,13 @@ std::string map_page_html(const MapPageInput& input) {
   html += kPageStyle;
   html += "#nowebgl { padding: 24px; font-size: 15px; color: #8a4b00; }\n.legend-line { display: inline-block; width: 18px; height: 3px; "
           "margin-right: 5px; vertical-align: 3px; }\n</style>\n</head>\n<body>\n<div id=\"view\"></div>\n<div id=\"panel\"></div>\n";
-  html += "<script>\n" + escape_script(kPageErrorHook) + "\n</script>\n";
-  html += "<script>/* three.js, " + std::string(kThreeJsDirectory) + "/three.min.js (libjs-three, MIT) */\n" + escape_script(three) +
+  html += "<script>\n" + escape_script_text(kPageErrorHook) + "\n</script>\n";
+  html += "<script>/* three.js, " + std::string(kThreeJsDirectory) + "/three.min.js (libjs-three, MIT) */\n" + escape_script_text(three) +
           "\n</script>\n";
   html += "<script>/* " + std::string(kThreeJsDirectory) + "/examples/js/controls/OrbitControls.js (libjs-three, MIT) */\n" +
-          escape_script(controls) + "\n</script>\n";
-  html += "<script type=\"application/json\" id=\"quadrix-map-data\">" + script_safe_json(data) + "</script>\n";
-  html += "<script>\n" + escape_script(kMapPageScript) + "\n</script>\n</body>\n</html>\n";
+          escape_script_text(controls) + "\n</script>\n";
+  html += "<script type=\"application/json\" id=\"quadrix-map-data\">" + json_for_script(data.dump(-1, ' ', false, json::error_handler_t::replace)) + "</script>\n";
+  html += "<script>\n" + escape_script_text(kMapPageScript) + "\n</script>\n</body>\n</html>\n";
   return html;
 }
 
@@ -331,7 +287,7 @@ MapPageInput read_map_folder(const std::string& folder, std::size_t point_budget
   input.title = root.filename().empty() ? root.parent_path().filename().string() : root.filename().string();
   input.poses = read_map_poses((root / "poses.tsv").string());
   input.edges = read_map_edges((root / "edges.csv").string());
-  if (std::filesystem::exists(root / "report.json")) input.report_json = read_text_file((root / "report.json").string(), "report");
+  if (std::filesystem::exists(root / "report.json")) input.report_json = read_page_file((root / "report.json").string(), "report");
   if (std::filesystem::exists(root / "map.ply")) input.points = read_point_cloud((root / "map.ply").string());
   input.point_budget = point_budget;
   return input;
