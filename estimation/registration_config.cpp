@@ -320,6 +320,13 @@ constexpr KeyRange kKeyRanges[] = {
     {"dense_search.source_samples", 6.0, 20000.0, false},
     {"dense_search.normal_neighbours", 3.0, 50.0, false},
     {"dense_search.correspondence_distance", 0.05, 1.0, false},
+    // The back end's measures of an answer (no status depends on them): a pairing distance within a
+    // scene's size, and the normal fit's neighbours capped like the dense search's (work).
+    {"quality.correspondence_distance", 0.01, 10.0, false},
+    {"quality.normal_neighbours", 3.0, 50.0, false},
+    // ICP from an initial guess halves its pairing distance from here down to the dense search's:
+    // at most 100 m (a dozen halvings), at least 5 cm (under it no pair is found).
+    {"initial_guess_reach", 0.05, 100.0, false},
     {"dense_search.iterations", 1.0, 100.0, false},
     {"dense_search.step", 0.05, 100.0, false},
     {"dense_search.range", 0.0, 100.0, false},

@@ -32,7 +32,8 @@ def test_the_readme_shows_the_tested_file_verbatim(source_dir, path, language):
 
 
 def run_example(source_dir, name, *arguments, cwd):
-    environment = dict(os.environ, PYTHONPATH=str(pathlib.Path(quadrix.__file__).parent))
+    # quadrix is a package (build/python/quadrix/__init__.py): its parent folder goes on the path.
+    environment = dict(os.environ, PYTHONPATH=str(pathlib.Path(quadrix.__file__).parent.parent))
     return subprocess.run([sys.executable, str(source_dir / "python" / "examples" / name), *map(str, arguments)],
                           capture_output=True, text=True, cwd=cwd, env=environment)
 
