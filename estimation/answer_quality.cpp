@@ -76,12 +76,11 @@ AnswerQuality measure_answer_quality(const PointCloud& source, const PointCloud&
   for (std::size_t i = 0; i < source.size(); ++i) finite_source += source.point(i).allFinite() ? 1 : 0;
   if (finite_source == 0 || index.size() == 0) return quality;
 
-  // Each source point's nearest target point (the most of the cost) and its normal in parallel
-  // blocks; the sums are taken after, in source order, so the result is the same on any thread count.
+  // Each source point's nearest target point in parallel blocks; the sums are taken after, in
+  // source order, so the result is the same on any thread count.
   struct Found {
     std::size_t column = 0;  // column of the nearest target point in the index
     double distance = 0.0;
-    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     bool inlier = false;
   };
   std::vector<Found> found(source.size());
@@ -93,23 +92,44 @@ AnswerQuality measure_answer_quality(const PointCloud& source, const PointCloud&
       if (!nearest) continue;
       found[i].column = nearest->index;
       found[i].distance = nearest->distance;
-      found[i].normal = fitted_normal(index, static_cast<Eigen::Index>(nearest->index), options.normal_neighbours);
       found[i].inlier = true;
     }
   });
-
   double squared_sum = 0.0;
+  std::vector<std::size_t> inlier_sources;
   for (std::size_t i = 0; i < found.size(); ++i) {
     if (!found[i].inlier) continue;
+    inlier_sources.push_back(i);
     quality.correspondences.emplace_back(i, target_indices[found[i].column]);
-    quality.normals.push_back(found[i].normal);
     squared_sum += found[i].distance * found[i].distance;
+  }
+
+  // The information from evenly spaced inliers (a normal fit each is most of the cost), weighed so
+  // that it estimates the sum over every inlier.
+  const std::size_t count = inlier_sources.size();
+  const std::size_t stride =
+      options.information_samples == 0 || count <= options.information_samples
+          ? 1
+          : (count + options.information_samples - 1) / options.information_samples;
+  quality.normals.assign(count, Eigen::Vector3d::Zero());
+  std::vector<std::size_t> sampled;
+  for (std::size_t k = 0; k < count; k += stride) sampled.push_back(k);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sampled.size(), 64), [&](const tbb::blocked_range<std::size_t>& block) {
+    for (std::size_t j = block.begin(); j < block.end(); ++j) {
+      const std::size_t k = sampled[j];
+      quality.normals[k] =
+          fitted_normal(index, static_cast<Eigen::Index>(found[inlier_sources[k]].column), options.normal_neighbours);
+    }
+  });
+  quality.information_weight = sampled.empty() ? 1.0 : static_cast<double>(count) / static_cast<double>(sampled.size());
+  for (const std::size_t k : sampled) {
     // Row of J: d/dδ of n · (Exp(δ) T s − t) at 0 is ((T s) × n, n).
-    const Eigen::Vector3d moved = transform * source.point(i);
+    const Eigen::Vector3d moved = transform * source.point(inlier_sources[k]);
     Eigen::Matrix<double, 6, 1> row;
-    row << moved.cross(found[i].normal), found[i].normal;
+    row << moved.cross(quality.normals[k]), quality.normals[k];
     quality.information.noalias() += row * row.transpose();
   }
+  quality.information *= quality.information_weight;
   const std::size_t inliers = quality.correspondences.size();
   quality.fitness = static_cast<double>(inliers) / static_cast<double>(finite_source);
   quality.inlier_rmse = inliers > 0 ? std::sqrt(squared_sum / static_cast<double>(inliers)) : 0.0;
