@@ -112,8 +112,11 @@ AnswerQuality measure_answer_quality(const PointCloud& source, const PointCloud&
           ? 1
           : (count + options.information_samples - 1) / options.information_samples;
   quality.normals.assign(count, Eigen::Vector3d::Zero());
+  // Sampled by source index (every stride-th source point that is an inlier), so two measures of
+  // the same source against slightly different inlier sets sample the same points.
   std::vector<std::size_t> sampled;
-  for (std::size_t k = 0; k < count; k += stride) sampled.push_back(k);
+  for (std::size_t k = 0; k < count; ++k)
+    if (inlier_sources[k] % stride == 0) sampled.push_back(k);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sampled.size(), 64), [&](const tbb::blocked_range<std::size_t>& block) {
     for (std::size_t j = block.begin(); j < block.end(); ++j) {
       const std::size_t k = sampled[j];
