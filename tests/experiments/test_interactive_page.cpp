@@ -7,13 +7,10 @@
 #include "experiments/reports/registration_report.h"
 #include "geometry/io.h"
 #include "geometry/error.h"
+#include "experiments/headless_browser.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#include <stb/stb_image.h>
 
 #include <chrono>
 #include <cstdio>
@@ -31,89 +28,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* const kChromium = "/usr/bin/chromium";
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using test::BrowserView;
+using test::fresh_directory;
+using test::kChromium;
+using test::open_in_browser;
+using test::read_text;
 
 // Runs a shell command, its output into `log`; returns the exit status.
 int run(const std::string& command, const fs::path& log) {
   return std::system((command + " > '" + log.string() + "' 2>&1").c_str());
-}
-
-fs::path fresh_directory(const std::string& name) {
-  const fs::path directory = fs::temp_directory_path() /
-                             ("quadrix_page_" + name + "_" + std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
-  fs::create_directories(directory);
-  return directory;
-}
-
-/// What the browser made of a page.
-struct BrowserView {
-  std::string dom;              ///< the DOM after the scripts ran (--dump-dom)
-  std::string console;          ///< chromium's console lines (INFO:CONSOLE) of both runs
-  double ready_ms = -1.0;       ///< data-ready-ms: performance.now() when the first frame was drawn
-  std::string error;            ///< data-error, empty when none
-  int canvas_colours = 0;       ///< distinct colours in the 3-D view's part of the screenshot
-  double canvas_drawn = 0.0;    ///< fraction of that part that is not the white background
-};
-
-// `webgl` false: a browser that cannot create a WebGL context (WebGL and the 3-D APIs off, no
-// software GL), as a locked-down browser or a remote desktop without GPU.
-std::string chromium_command(const fs::path& profile, bool webgl = true) {
-  return std::string(kChromium) +
-         (webgl ? " --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader"
-                : " --headless --no-sandbox --disable-gpu --disable-webgl --disable-3d-apis") +
-         " --disable-quic --no-first-run"
-         " --disable-background-networking --disable-component-update --disable-sync --enable-logging=stderr --v=0"
-         " --window-size=1280,800 --user-data-dir='" + profile.string() + "'";
-}
-
-// Opens `page` (with an optional "#..." fragment) twice in fresh profiles: once dumping the DOM, once
-// taking a 1280x800 screenshot.
-BrowserView open_in_browser(const fs::path& page, const std::string& fragment = "", bool webgl = true) {
-  const fs::path work = fresh_directory("browser");
-  const std::string url = "'file://" + fs::absolute(page).string() + fragment + "'";
-  BrowserView view;
-  const fs::path dom_path = work / "dom.html", dom_log = work / "dom.log";
-  EXPECT_EQ(std::system(("timeout 120 " + chromium_command(work / "profile_dom", webgl) + " --dump-dom " + url + " > '" +
-                         dom_path.string() + "' 2> '" + dom_log.string() + "'").c_str()),
-            0)
-      << read_text(dom_log);
-  view.dom = read_text(dom_path);
-  const fs::path shot = work / "shot.png", shot_log = work / "shot.log";
-  EXPECT_EQ(run("timeout 120 " + chromium_command(work / "profile_shot", webgl) + " --screenshot='" + shot.string() + "' " + url, shot_log), 0)
-      << read_text(shot_log);
-  std::istringstream lines(read_text(dom_log) + read_text(shot_log));
-  for (std::string line; std::getline(lines, line);)
-    if (line.find(":CONSOLE") != std::string::npos) view.console += line + "\n";
-  std::smatch match;
-  if (std::regex_search(view.dom, match, std::regex("data-ready-ms=\"([0-9.]+)\""))) view.ready_ms = std::stod(match[1]);
-  if (std::regex_search(view.dom, match, std::regex("data-error=\"([^\"]*)\""))) view.error = match[1];
-  int width = 0, height = 0, channels = 0;
-  unsigned char* pixels = stbi_load(shot.string().c_str(), &width, &height, &channels, 3);
-  EXPECT_NE(pixels, nullptr) << shot << ": not a PNG the screenshot should have written";
-  if (pixels != nullptr) {
-    // The 3-D view is the left part of the window (the side panel is 360 px wide on the right).
-    std::set<unsigned> colours;
-    std::size_t drawn = 0, total = 0;
-    for (int y = 40; y < height - 40; ++y)
-      for (int x = 10; x < width - 380; ++x) {
-        const unsigned char* p = pixels + 3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x));
-        colours.insert((unsigned{p[0]} << 16) | (unsigned{p[1]} << 8) | p[2]);
-        drawn += (p[0] < 245 || p[1] < 245 || p[2] < 245) ? 1 : 0;
-        ++total;
-      }
-    view.canvas_colours = static_cast<int>(colours.size());
-    view.canvas_drawn = total ? static_cast<double>(drawn) / static_cast<double>(total) : 0.0;
-    stbi_image_free(pixels);
-  }
-  fs::remove_all(work);
-  return view;
 }
 
 // The checks every page must pass; `status` is what the side panel must show.

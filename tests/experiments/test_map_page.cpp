@@ -7,12 +7,9 @@
 #include "experiments/reports/map_page.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "experiments/headless_browser.h"
 
 #include <gtest/gtest.h>
-
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#include <stb/stb_image.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -28,24 +25,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* const kChromium = "/usr/bin/chromium";
+using test::BrowserView;
+using test::kChromium;
+using test::read_text;
 // A session name and an edge status that would run script if the page inserted them as HTML.
 const std::string kHostileSession = "</script><script>document.body.setAttribute('data-pwned','1')</script>";
 const std::string kHostileStatus = "<img src=x onerror=\"document.body.setAttribute('data-pwned','2')\">";
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-fs::path fresh_directory(const std::string& name) {
-  const fs::path directory = fs::temp_directory_path() / ("quadrix_map_page_" + name + "_" +
-                                                          std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
-  fs::create_directories(directory);
-  return directory;
-}
+fs::path fresh_directory(const std::string& name) { return test::fresh_directory("map_" + name); }
 
 std::string pose_row(const Eigen::Isometry3d& pose, char separator) {
   std::ostringstream text;
@@ -176,49 +163,7 @@ TEST(MapPage, RefusesMalformedFilesNamingTheLine) {
   EXPECT_FALSE(is_map_folder((root / "map").string()));
 }
 
-// What headless chromium made of a page: the DOM after the scripts ran and a screenshot's statistics.
-struct BrowserView {
-  std::string dom;
-  double drawn = 0.0;  // fraction of the 3-D view's part of the screenshot that is not white
-  int colours = 0;
-};
-
-BrowserView open_page(const fs::path& page, bool webgl) {
-  const fs::path work = fresh_directory("browser");
-  std::string command = std::string(kChromium) +
-                        " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking"
-                        " --disable-component-update --disable-sync --window-size=1280,800";
-  command += webgl ? " --enable-unsafe-swiftshader" : " --disable-webgl --disable-3d-apis";
-  const std::string url = "'file://" + fs::absolute(page).string() + "'";
-  BrowserView view;
-  EXPECT_EQ(std::system(("timeout 120 " + command + " --user-data-dir='" + (work / "a").string() + "' --dump-dom " + url + " > '" +
-                         (work / "dom.html").string() + "' 2>/dev/null").c_str()),
-            0);
-  view.dom = read_text(work / "dom.html");
-  const fs::path shot = work / "shot.png";
-  EXPECT_EQ(std::system(("timeout 120 " + command + " --user-data-dir='" + (work / "b").string() + "' --screenshot='" + shot.string() +
-                         "' " + url + " > /dev/null 2>&1").c_str()),
-            0);
-  int width = 0, height = 0, channels = 0;
-  unsigned char* pixels = stbi_load(shot.string().c_str(), &width, &height, &channels, 3);
-  EXPECT_NE(pixels, nullptr);
-  if (pixels != nullptr) {
-    std::set<unsigned> colours;
-    std::size_t drawn = 0, total = 0;
-    for (int y = 40; y < height - 40; ++y)
-      for (int x = 10; x < width - 380; ++x) {
-        const unsigned char* p = pixels + 3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x));
-        colours.insert((unsigned{p[0]} << 16) | (unsigned{p[1]} << 8) | p[2]);
-        drawn += (p[0] < 245 || p[1] < 245 || p[2] < 245) ? 1 : 0;
-        ++total;
-      }
-    view.colours = static_cast<int>(colours.size());
-    view.drawn = total ? static_cast<double>(drawn) / static_cast<double>(total) : 0.0;
-    stbi_image_free(pixels);
-  }
-  fs::remove_all(work);
-  return view;
-}
+BrowserView open_page(const fs::path& page, bool webgl) { return test::open_in_browser(page, "", webgl); }
 
 void expect_panel(const std::string& dom) {
   EXPECT_EQ(dom.find("data-error=\""), std::string::npos) << dom.substr(0, 3000);
@@ -241,8 +186,8 @@ TEST(MapPage, DrawsInChromiumWithAndWithoutWebGL) {
   EXPECT_EQ(with.dom.find("data-webgl=\"missing\""), std::string::npos) << "swiftshader WebGL was expected";
   EXPECT_EQ(with.dom.find("id=\"nowebgl\""), std::string::npos);
   EXPECT_NE(with.dom.find("<title>quadrix map ready"), std::string::npos);
-  EXPECT_GE(with.colours, 4) << "trajectories, edges and points in several colours";
-  EXPECT_GE(with.drawn, 0.005);
+  EXPECT_GE(with.canvas_colours, 4) << "trajectories, edges and points in several colours";
+  EXPECT_GE(with.canvas_drawn, 0.005);
   const BrowserView without = open_page(page, false);
   expect_panel(without.dom);
   EXPECT_NE(without.dom.find("data-webgl=\"missing\""), std::string::npos);
