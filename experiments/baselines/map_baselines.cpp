@@ -4,6 +4,7 @@
 
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "geometry/scan_list.h"
 
 #include <open3d/geometry/KDTreeSearchParam.h>
 #include <open3d/geometry/PointCloud.h>
@@ -36,37 +37,6 @@ namespace o3d_geometry = open3d::geometry;
 namespace o3d_registration = open3d::pipelines::registration;
 
 constexpr double kPi = 3.14159265358979323846;
-
-std::vector<std::string> split_tabs(const std::string& line) {
-  std::vector<std::string> fields;
-  std::string field;
-  std::istringstream in(line);
-  while (std::getline(in, field, '\t')) fields.push_back(field);
-  return fields;
-}
-
-Eigen::Isometry3d parse_pose(const std::vector<std::string>& numbers, const std::string& path, std::size_t line) {
-  if (numbers.size() != 12)
-    throw Error(path + ": line " + std::to_string(line) + ": expected 12 numbers (row-major 3x4 pose), got " + std::to_string(numbers.size()));
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  for (int k = 0; k < 12; ++k) {
-    std::size_t used = 0;
-    double value = 0.0;
-    try {
-      value = std::stod(numbers[static_cast<std::size_t>(k)], &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != numbers[static_cast<std::size_t>(k)].size() || !std::isfinite(value))
-      throw Error(path + ": line " + std::to_string(line) + ": pose number " + std::to_string(k + 1) + " is not a number: '" +
-                  numbers[static_cast<std::size_t>(k)] + "'");
-    pose.matrix()(k / 4, k % 4) = value;
-  }
-  const Eigen::Matrix3d r = pose.linear();
-  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > 1e-3 || r.determinant() < 0.0)
-    throw Error(path + ": line " + std::to_string(line) + ": the 3x3 part is not a rotation");
-  return pose;
-}
 
 std::string pose_text(const Eigen::Isometry3d& pose, char separator) {
   std::string text;
@@ -123,58 +93,6 @@ std::shared_ptr<o3d_geometry::PointCloud> prepared_cloud(const std::string& path
 
 std::vector<std::string> map_baseline_methods() { return {"odometry", "icp-loops", "multiway"}; }
 
-std::vector<ScanListRow> read_scan_list(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open the scan list");
-  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-  std::string line;
-  if (!std::getline(in, line)) throw Error(path + ": empty; expected a header session, scan, odometry");
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  const std::vector<std::string> header = split_tabs(line);
-  if (header.size() < 3 || header[0] != "session" || header[1] != "scan" || header[2] != "odometry")
-    throw Error(path + ": line 1: expected the header session<TAB>scan<TAB>odometry, got '" + line + "'");
-  std::vector<ScanListRow> rows;
-  std::set<std::pair<std::string, std::string>> seen;
-  for (std::size_t number = 2; std::getline(in, line); ++number) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) continue;
-    const std::vector<std::string> fields = split_tabs(line);
-    if (fields.size() < 3) throw Error(path + ": line " + std::to_string(number) + ": expected session, scan and odometry");
-    ScanListRow row;
-    row.session = fields[0];
-    row.scan = fields[1];
-    row.path = (folder / fields[1]).string();
-    if (!std::filesystem::exists(row.path)) throw Error(path + ": line " + std::to_string(number) + ": scan file " + row.path + " not found");
-    if (!seen.insert({row.session, row.scan}).second)
-      throw Error(path + ": line " + std::to_string(number) + ": duplicate row for session " + row.session + ", scan " + row.scan);
-    if (fields[2] != "-") {
-      std::istringstream numbers(fields[2]);
-      std::vector<std::string> values;
-      for (std::string value; numbers >> value;) values.push_back(value);
-      row.odometry = parse_pose(values, path, number);
-      row.has_odometry = true;
-    }
-    rows.push_back(row);
-  }
-  if (rows.empty()) throw Error(path + ": no scans listed");
-  return rows;
-}
-
-std::map<std::pair<std::string, std::string>, Eigen::Isometry3d> read_pose_table(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open the poses");
-  std::map<std::pair<std::string, std::string>, Eigen::Isometry3d> poses;
-  std::string line;
-  for (std::size_t number = 1; std::getline(in, line); ++number) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || (number == 1 && line.rfind("session", 0) == 0)) continue;
-    std::vector<std::string> fields = split_tabs(line);
-    if (fields.size() != 14) throw Error(path + ": line " + std::to_string(number) + ": expected session, scan and 12 numbers");
-    poses[{fields[0], fields[1]}] = parse_pose(std::vector<std::string>(fields.begin() + 2, fields.end()), path, number);
-  }
-  return poses;
-}
-
 MapBaselineSummary run_map_baseline(const std::string& method, const std::string& scan_list, const std::string& out,
                                     const std::string& truth_path, const MapBaselineOptions& options) {
   const std::vector<std::string> methods = map_baseline_methods();
@@ -183,10 +101,11 @@ MapBaselineSummary run_map_baseline(const std::string& method, const std::string
   const auto start = std::chrono::steady_clock::now();
   open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
   omp_set_num_threads(options.threads);
-  const std::vector<ScanListRow> rows = read_scan_list(scan_list);
+  const ScanList list = read_scan_list(scan_list);
+  const std::vector<ScanEntry>& rows = list.scans;
   std::vector<Session> sessions;
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    if (!rows[i].has_odometry)
+    if (!rows[i].odometry)
       throw Error(scan_list + ": session " + rows[i].session + " has no odometry ('-'); the mapping baselines start from it");
     auto it = std::find_if(sessions.begin(), sessions.end(), [&](const Session& s) { return s.name == rows[i].session; });
     if (it == sessions.end()) {
@@ -215,10 +134,10 @@ MapBaselineSummary run_map_baseline(const std::string& method, const std::string
     const std::size_t first_edge = edges.size();
     // Odometry edges: the given odometry, for every method, so that the methods differ only in their loop edges.
     std::vector<Eigen::Isometry3d> initial(session.rows.size());
-    initial[0] = rows[session.rows[0]].odometry;
+    initial[0] = *rows[session.rows[0]].odometry;
     for (std::size_t k = 0; k + 1 < session.rows.size(); ++k) {
       const std::size_t a = session.rows[k], b = session.rows[k + 1];
-      Edge edge{a, b, "odometry", "ok", true, rows[b].odometry.inverse() * rows[a].odometry};
+      Edge edge{a, b, "odometry", "ok", true, rows[b].odometry->inverse() * *rows[a].odometry};
       initial[k + 1] = initial[k] * edge.transform.inverse();
       edges.push_back(edge);
     }
@@ -301,7 +220,8 @@ MapBaselineSummary run_map_baseline(const std::string& method, const std::string
   // Evaluation against the truth: ATE per session (each aligned alone) and of session 1 (the map frame),
   // and the used loop edges more than 2 m or 5 degrees from the true relative pose.
   if (!truth_path.empty()) {
-    const auto truth = read_pose_table(truth_path);
+    std::map<std::pair<std::string, std::string>, Eigen::Isometry3d> truth;
+    for (const PoseRow& row : read_pose_table(truth_path)) truth[{row.session, row.scan}] = row.pose;
     const auto truth_of = [&](std::size_t row) {
       const auto it = truth.find({rows[row].session, rows[row].scan});
       if (it == truth.end()) throw Error(truth_path + ": no pose for session " + rows[row].session + ", scan " + rows[row].scan);

@@ -22,22 +22,6 @@
 
 namespace quadrix {
 
-/// One row of SCANS.tsv.
-struct ScanListRow {
-  std::string session;                                       ///< session name
-  std::string scan;                                          ///< cloud path as written (relative to the list)
-  std::string path;                                          ///< cloud path resolved against the list's folder
-  bool has_odometry = false;                                 ///< false when the odometry column is '-'
-  Eigen::Isometry3d odometry = Eigen::Isometry3d::Identity();  ///< sensor -> session odometry frame
-};
-
-/// Reads SCANS.tsv (header with session, scan, odometry; tab-separated). Throws quadrix::Error naming
-/// the file and line of a malformed row, a missing cloud file or a duplicate (session, scan).
-std::vector<ScanListRow> read_scan_list(const std::string& path);
-
-/// Reads a poses file (header, then session, scan, 12 numbers) into (session, scan) -> pose.
-std::map<std::pair<std::string, std::string>, Eigen::Isometry3d> read_pose_table(const std::string& path);
-
 /// Options of the mapping baselines.
 struct MapBaselineOptions {
   double radius = 15.0;          ///< loop candidate search radius around the odometry position, m (LIO-SAM's default)

@@ -3,6 +3,7 @@
 
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "geometry/text_fields.h"
 
 #include <algorithm>
 #include <array>
@@ -19,21 +20,6 @@ namespace quadrix {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::vector<std::string> split(const std::string& line, char separator) {
-  std::vector<std::string> fields;
-  std::string field;
-  std::istringstream stream(line);
-  while (std::getline(stream, field, separator)) fields.push_back(field);
-  if (!line.empty() && line.back() == separator) fields.emplace_back();
-  return fields;
-}
-
-std::string trim(const std::string& text) {
-  const auto begin = text.find_first_not_of(" \t\r\n");
-  if (begin == std::string::npos) return "";
-  return text.substr(begin, text.find_last_not_of(" \t\r\n") - begin + 1);
-}
 
 std::string frame_name(int frame) {
   char name[16];
@@ -118,11 +104,11 @@ std::vector<BenchPair> read_pairs_tsv(const std::string& path) {
   while (std::getline(file, line)) {
     ++line_number;
     const std::string where = path + ":" + std::to_string(line_number);
-    if (trim(line).empty() || trim(line)[0] == '#') continue;
+    if (trimmed(line).empty() || trimmed(line)[0] == '#') continue;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    const std::vector<std::string> fields = split(line, '\t');
+    const std::vector<std::string> fields = split_fields(line, '\t');
     if (columns.empty()) {
-      for (std::size_t c = 0; c < fields.size(); ++c) columns[trim(fields[c])] = c;
+      for (std::size_t c = 0; c < fields.size(); ++c) columns[trimmed(fields[c])] = c;
       for (const char* required : {"id", "source", "target", "gt"})
         if (!columns.count(required))
           throw Error(where + ": header lacks the column '" + required +
@@ -134,7 +120,7 @@ std::vector<BenchPair> read_pairs_tsv(const std::string& path) {
                   std::to_string(columns.size()) + " (as many as the header)");
     const auto field = [&](const char* name) -> std::string {
       const auto found = columns.find(name);
-      return found == columns.end() ? std::string() : trim(fields[found->second]);
+      return found == columns.end() ? std::string() : trimmed(fields[found->second]);
     };
     BenchPair pair;
     pair.id = field("id");
@@ -256,8 +242,8 @@ std::string DistanceBin::name() const { return number_text(minimum) + "-" + numb
 
 std::vector<DistanceBin> parse_distance_bins(const std::string& text) {
   std::vector<DistanceBin> bins;
-  for (const std::string& entry : split(text, ',')) {
-    const std::string item = trim(entry);
+  for (const std::string& entry : split_fields(text, ',')) {
+    const std::string item = trimmed(entry);
     const auto dash = item.find('-', 1);
     DistanceBin bin;
     try {
@@ -292,8 +278,8 @@ std::vector<double> parse_odometry_distances(const std::string& text) {
       throw Error("--distance entry '" + item + "': expected a positive distance in metres, a list 1,5,10 or a range 1..10");
     }
   };
-  for (const std::string& entry : split(text, ',')) {
-    const std::string item = trim(entry);
+  for (const std::string& entry : split_fields(text, ',')) {
+    const std::string item = trimmed(entry);
     const auto dots = item.find("..");
     if (dots == std::string::npos) {
       distances.push_back(parse(item));

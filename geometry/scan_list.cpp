@@ -1,9 +1,10 @@
 // Scan lists (SCANS.tsv, the KITTI odometry layout) and pose tables (poses.tsv): parsing and the
 // checks that name the row of bad input.
-#include "estimation/mapping.h"
+#include "geometry/scan_list.h"
 
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "geometry/text_fields.h"
 
 #include <Eigen/SVD>
 
@@ -19,22 +20,6 @@
 
 namespace quadrix {
 namespace {
-
-std::vector<std::string> split(const std::string& line, char separator) {
-  std::vector<std::string> fields;
-  std::string field;
-  std::istringstream stream(line);
-  while (std::getline(stream, field, separator)) fields.push_back(field);
-  if (!line.empty() && line.back() == separator) fields.emplace_back();
-  return fields;
-}
-
-std::string trimmed(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
 
 std::vector<std::string> whitespace_tokens(const std::string& text) {
   std::vector<std::string> tokens;
@@ -125,7 +110,7 @@ ScanList read_scan_list(const std::string& path) {
     ++row;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (trimmed(line).empty() || trimmed(line).front() == '#') continue;
-    std::vector<std::string> fields = split(line, '\t');
+    std::vector<std::string> fields = split_fields(line, '\t');
     if (session_column < 0) {
       for (std::size_t index = 0; index < fields.size(); ++index) {
         const std::string name = trimmed(fields[index]);
@@ -208,7 +193,7 @@ std::vector<PoseRow> read_pose_table(const std::string& path) {
     ++row;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (trimmed(line).empty() || trimmed(line).front() == '#') continue;
-    const std::vector<std::string> fields = split(line, '\t');
+    const std::vector<std::string> fields = split_fields(line, '\t');
     if (!header) {
       if (fields.size() < 3 || trimmed(fields[0]) != "session" || trimmed(fields[1]) != "scan")
         throw file_error(path, "row " + std::to_string(row) + ": expected a header beginning with the tab-separated columns session, scan");
