@@ -5,6 +5,7 @@
 // 52 -> 88 (29.9 m apart); and leaving out the isolated points of KITTI frame 52 (as the extraction
 // and every check do), as scanned and with 30% uniform outliers; and the free-space check's range
 // image and measure on frame 52. Skips with a message when ../shared/data is absent.
+#include "estimation/answer_quality.h"
 #include "estimation/dense_search.h"
 #include "estimation/ground_correlation.h"
 #include "estimation/registration.h"
@@ -13,6 +14,7 @@
 #include "geometry/voxel_cells.h"
 
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -122,6 +124,25 @@ void BM_VerifyOkAnswerKitti0To4438(benchmark::State& state) {
   state.counters["dense_preparation_ms"] = benchmark::Counter(preparation_ms / static_cast<double>(state.iterations()));
 }
 BENCHMARK(BM_VerifyOkAnswerKitti0To4438)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// measure_answer_quality (estimation/answer_quality.h) of the `ok` answer of KITTI-00 0 -> 4438: the
+// fitness, inlier RMSE, correspondences and information every `ok` answer carries, on the whole
+// clouds (about 120k points each); state.range(0) threads (0: TBB's default).
+void BM_MeasureAnswerQualityKitti0To4438(benchmark::State& state) {
+  quadrix::PointCloud source, target;
+  if (!read_shared_pair(state, "kitti00/velodyne/000000.bin", "kitti00/velodyne/004438.ply", source, target)) return;
+  const quadrix::RegistrationOptions options = quadrix::resolve_registration_options("auto", source, "auto", target);
+  const quadrix::RegistrationResult registered = quadrix::register_clouds(source, target, options);
+  if (registered.status != quadrix::RegistrationStatus::Ok) {
+    state.SkipWithError(("the pair did not register ok: " + registered.message).c_str());
+    return;
+  }
+  std::optional<tbb::global_control> threads;
+  if (state.range(0) > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(state.range(0)));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(quadrix::measure_answer_quality(source, target, registered.transform, options.quality).fitness);
+}
+BENCHMARK(BM_MeasureAnswerQualityKitti0To4438)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // KITTI-00 frame 52, or nothing once `state` is skipped because the shared data is absent.
 std::optional<quadrix::PointCloud> kitti_frame_52(benchmark::State& state) {
