@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -68,11 +69,112 @@ std::vector<std::string> record_field_names(int format, std::size_t extra_bytes)
   return names;
 }
 
+/// Metres per unit and name of an EPSG linear unit code (GeoTIFF keys 3076, 4099, 2052); {0, ""}
+/// for a code not in this table (the units then stay undeclared).
+std::pair<double, std::string> epsg_linear_unit(unsigned code) {
+  switch (code) {
+    case 9001: return {1.0, "metre"};
+    case 9002: return {0.3048, "foot"};
+    case 9003: return {1200.0 / 3937.0, "US survey foot"};
+    case 9005: return {0.3047972654, "Clarke's foot"};
+    case 9036: return {1000.0, "kilometre"};
+    case 9094: return {0.3047997101815088, "Gold Coast foot"};
+    case 9095: return {0.3048007491, "British foot (1936)"};
+    default: return {0.0, ""};
+  }
+}
+
+/// The units of a GeoKeyDirectory (`keys`, 16-bit words) with its double parameters (`doubles`).
+void units_from_geo_keys(const std::vector<std::uint16_t>& keys, const std::vector<double>& doubles, LasUnits& units) {
+  if (keys.size() < 4) return;
+  const std::size_t count = std::min<std::size_t>(keys[3], (keys.size() - 4) / 4);
+  double user_size = 0.0;
+  unsigned linear = 0, vertical = 0, model = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::uint16_t id = keys[4 + 4 * k], location = keys[5 + 4 * k], value = keys[7 + 4 * k];
+    if (location == 0) {
+      if (id == 1024) model = value;
+      if (id == 3076) linear = value;
+      if (id == 4099) vertical = value;
+    } else if (location == 34736 && id == 3077 && value < doubles.size()) {
+      user_size = doubles[value];
+    }
+  }
+  if (model == 2) {
+    units.geographic = true;
+    units.horizontal_name = "degree";
+  } else if (linear == 32767 && std::isfinite(user_size) && user_size > 0.0) {
+    units.horizontal_metres = user_size;
+    units.horizontal_name = "user-defined unit of " + std::to_string(user_size) + " m";
+  } else if (const auto [metres, name] = epsg_linear_unit(linear); metres > 0.0) {
+    units.horizontal_metres = metres;
+    units.horizontal_name = name;
+  }
+  if (const auto [metres, name] = epsg_linear_unit(vertical); metres > 0.0) {
+    units.vertical_metres = metres;
+    units.vertical_name = name;
+  }
+  if (!units.horizontal_name.empty() || !units.vertical_name.empty()) units.source = "GeoTIFF keys";
+}
+
+/// The UNIT[name, metres] directly inside the WKT element that starts at `begin` ("PROJCS[" or
+/// "VERT_CS["): the one at bracket depth 1, after the nested GEOGCS's own angular unit.
+bool wkt_element_unit(const std::string& wkt, std::size_t begin, double& metres, std::string& name) {
+  int depth = 0;
+  for (std::size_t i = wkt.find('[', begin); i < wkt.size(); ++i) {
+    const char c = wkt[i];
+    if (c == '[') ++depth;
+    else if (c == ']' && --depth == 0) return false;
+    else if (depth == 1 && wkt.compare(i, 6, "UNIT[\"") == 0) {
+      const std::size_t name_end = wkt.find('"', i + 6);
+      if (name_end == std::string::npos) return false;
+      name = wkt.substr(i + 6, name_end - i - 6);
+      const std::size_t comma = wkt.find(',', name_end);
+      if (comma == std::string::npos) return false;
+      char* end = nullptr;
+      const std::string tail = wkt.substr(comma + 1, 40);
+      metres = std::strtod(tail.c_str(), &end);
+      return end != tail.c_str() && std::isfinite(metres) && metres > 0.0;
+    }
+  }
+  return false;
+}
+
+/// The units of an OGC WKT (version 1) coordinate system.
+void units_from_wkt(const std::string& wkt, LasUnits& units) {
+  LasUnits found;
+  const std::size_t projected = wkt.find("PROJCS[");
+  double metres = 0.0;
+  std::string name;
+  if (projected != std::string::npos) {
+    if (wkt_element_unit(wkt, projected, metres, name)) {
+      found.horizontal_metres = metres;
+      found.horizontal_name = name;
+    }
+  } else if (wkt.find("GEOGCS[") != std::string::npos) {
+    found.geographic = true;
+    found.horizontal_name = "degree";
+  }
+  const std::size_t vertical = wkt.find("VERT_CS[");
+  if (vertical != std::string::npos && wkt_element_unit(wkt, vertical, metres, name)) {
+    found.vertical_metres = metres;
+    found.vertical_name = name;
+  }
+  if (!found.horizontal_name.empty() || !found.vertical_name.empty()) {
+    found.source = "WKT";
+    units = found;
+  }
+}
+
 /// Walks the variable-length records between the public header and the points: each must end
-/// before the point data; a LASzip record marks a compressed file.
-void check_variable_length_records(const std::string& path, const RandomAccessFile& file, const LasHeader& header) {
+/// before the point data; a LASzip record marks a compressed file. Reads the CRS records' units
+/// into header.units (the WKT when both are present: LAS 1.4 makes it the required form).
+void check_variable_length_records(const std::string& path, const RandomAccessFile& file, LasHeader& header) {
   std::size_t position = header.header_size;
   char vlr[kVlrHeaderSize];
+  std::vector<std::uint16_t> geo_keys;
+  std::vector<double> geo_doubles;
+  std::string wkt;
   for (std::size_t k = 0; k < header.vlr_count; ++k) {
     if (position > header.point_data_offset || header.point_data_offset - position < kVlrHeaderSize)
       throw file_error(path, "variable-length record " + std::to_string(k + 1) + " of " + std::to_string(header.vlr_count) +
@@ -83,12 +185,28 @@ void check_variable_length_records(const std::string& path, const RandomAccessFi
     const std::uint16_t record_id = load<std::uint16_t>(vlr, 18);
     const std::size_t length = load<std::uint16_t>(vlr, 20);
     if (user == "laszip encoded" || record_id == 22204) throw_laz(path, "it has a LASzip variable-length record");
+    const std::size_t body = position + kVlrHeaderSize;
+    if (user == "LASF_Projection" && body <= header.point_data_offset && header.point_data_offset - body >= length) {
+      std::string bytes(length, '\0');
+      if (length > 0) file.read_at(body, length, bytes.data());
+      if (record_id == 34735) {
+        geo_keys.resize(length / 2);
+        if (!geo_keys.empty()) std::memcpy(geo_keys.data(), bytes.data(), 2 * geo_keys.size());
+      } else if (record_id == 34736) {
+        geo_doubles.resize(length / 8);
+        if (!geo_doubles.empty()) std::memcpy(geo_doubles.data(), bytes.data(), 8 * geo_doubles.size());
+      } else if (record_id == 2112) {
+        wkt = fixed_text(bytes.data(), bytes.size());
+      }
+    }
     position += kVlrHeaderSize + length;
     if (position > header.point_data_offset)
       throw file_error(path, "variable-length record " + std::to_string(k + 1) + " ('" + user + "', " +
                                  std::to_string(length) + " bytes) runs past the 'offset to point data' " +
                                  std::to_string(header.point_data_offset));
   }
+  units_from_geo_keys(geo_keys, geo_doubles, header.units);
+  if (!wkt.empty()) units_from_wkt(wkt, header.units);
 }
 
 /// True when the header's box is all zeros (written by tools that do not fill it): nothing to check against.

@@ -11,6 +11,20 @@
 
 namespace quadrix {
 
+/// The length units a LAS file's coordinate reference system declares, from its GeoTIFF keys
+/// (LASF_Projection 34735/34736: ProjLinearUnitsGeoKey 3076, ProjLinearUnitSizeGeoKey 3077,
+/// VerticalUnitsGeoKey 4099, GTModelTypeGeoKey 1024) or its OGC WKT (LASF_Projection 2112: the UNIT
+/// of PROJCS and of VERT_CS). Malformed CRS records leave the units undeclared: they never stop
+/// the points from being read.
+struct LasUnits {
+  double horizontal_metres = 0.0;        ///< metres per x/y unit (0: not declared, or angular)
+  double vertical_metres = 0.0;          ///< metres per z unit (0: not declared; then the horizontal unit is the usual reading)
+  std::string horizontal_name;           ///< e.g. "metre", "foot", "US survey foot", "degree" (geographic); empty: not declared
+  std::string vertical_name;             ///< the z unit's name, empty when not declared
+  std::string source;                    ///< "GeoTIFF keys", "WKT", or empty
+  bool geographic = false;               ///< x/y are longitude/latitude in degrees (GTModelType 2 or a WKT without PROJCS)
+};
+
 /// What a LAS public header declares, checked against the file (see read_las_header).
 struct LasHeader {
   int version_major = 1;                 ///< 1
@@ -29,6 +43,7 @@ struct LasHeader {
   std::string system_identifier;         ///< as written (trailing NULs removed)
   std::string generating_software;       ///< as written (trailing NULs removed)
   std::size_t file_size = 0;             ///< bytes of the whole file
+  LasUnits units;                        ///< coordinate units the file's CRS records declare
 };
 
 /// Base record size of each LAS point data record format 0..10 (LAS 1.4 R15, section 2.6).

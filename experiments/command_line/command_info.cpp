@@ -30,6 +30,16 @@ void print_las_header(const LasHeader& header) {
   std::printf("  header max %.4f %.4f %.4f\n", header.max.x(), header.max.y(), header.max.z());
   if (!header.system_identifier.empty() || !header.generating_software.empty())
     std::printf("  written by %s / %s\n", header.system_identifier.c_str(), header.generating_software.c_str());
+  const LasUnits& units = header.units;
+  if (units.source.empty()) {
+    std::printf("  units      not declared (no CRS record the reader understands)\n");
+  } else {
+    const std::string horizontal = units.horizontal_name.empty() ? "not declared" : units.horizontal_name;
+    std::printf("  units      x, y: %s", horizontal.c_str());
+    if (units.horizontal_metres > 0.0) std::printf(" (%.10g m)", units.horizontal_metres);
+    if (!units.vertical_name.empty()) std::printf("; z: %s (%.10g m)", units.vertical_name.c_str(), units.vertical_metres);
+    std::printf("; from the %s\n", units.source.c_str());
+  }
 }
 
 // Prints one file's description; throws quadrix::Error when it cannot be read.

@@ -23,12 +23,20 @@ struct LasTestPoint {
   std::array<std::uint16_t, 3> rgb{};
 };
 
+/// A variable-length record to write after the header.
+struct LasTestVlr {
+  std::string user = "LASF_Projection";  ///< user ID (16 bytes, NUL-padded)
+  std::uint16_t record_id = 0;            ///< record ID
+  std::string payload;                    ///< the record's bytes
+};
+
 /// What to write.
 struct LasTestFile {
   int version_minor = 2;
   int point_format = 0;
   std::size_t extra_bytes = 0;
   std::size_t vlr_payload = 0;  ///< one VLR with this many payload bytes, when > 0
+  std::vector<LasTestVlr> vlrs; ///< further VLRs, after that one
   Eigen::Vector3d scale = Eigen::Vector3d::Constant(0.01);
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   std::vector<LasTestPoint> points;
@@ -52,7 +60,8 @@ void put_at(std::string& bytes, std::size_t offset, T value) {
 inline std::string las_test_bytes(const LasTestFile& file) {
   const std::size_t header_size = las_test_header_size(file.version_minor);
   const std::size_t record = las_test_base_size(file.point_format) + file.extra_bytes;
-  const std::size_t vlr_bytes = file.vlr_payload > 0 ? 54 + file.vlr_payload : 0;
+  std::size_t vlr_bytes = file.vlr_payload > 0 ? 54 + file.vlr_payload : 0;
+  for (const LasTestVlr& vlr : file.vlrs) vlr_bytes += 54 + vlr.payload.size();
   const std::size_t offset_to_points = header_size + vlr_bytes;
   std::string bytes(offset_to_points + record * file.points.size(), '\0');
   std::memcpy(&bytes[0], "LASF", 4);
@@ -61,7 +70,7 @@ inline std::string las_test_bytes(const LasTestFile& file) {
   std::memcpy(&bytes[26], "quadrix test", 12);
   put_at<std::uint16_t>(bytes, 94, static_cast<std::uint16_t>(header_size));
   put_at<std::uint32_t>(bytes, 96, static_cast<std::uint32_t>(offset_to_points));
-  put_at<std::uint32_t>(bytes, 100, file.vlr_payload > 0 ? 1u : 0u);
+  put_at<std::uint32_t>(bytes, 100, static_cast<std::uint32_t>((file.vlr_payload > 0 ? 1u : 0u) + file.vlrs.size()));
   bytes[104] = static_cast<char>(file.point_format);
   put_at<std::uint16_t>(bytes, 105, static_cast<std::uint16_t>(record));
   const bool legacy_allowed = file.point_format < 6;
@@ -81,10 +90,19 @@ inline std::string las_test_bytes(const LasTestFile& file) {
     put_at<double>(bytes, 187 + 16 * axis, low[axis]);
   }
   if (file.version_minor >= 4) put_at<std::uint64_t>(bytes, 247, file.points.size());
-  if (vlr_bytes > 0) {
+  std::size_t at_vlr = header_size;
+  if (file.vlr_payload > 0) {
     std::memcpy(&bytes[header_size + 2], "LASF_Projection", 15);
     put_at<std::uint16_t>(bytes, header_size + 18, 2112);
     put_at<std::uint16_t>(bytes, header_size + 20, static_cast<std::uint16_t>(file.vlr_payload));
+    at_vlr += 54 + file.vlr_payload;
+  }
+  for (const LasTestVlr& vlr : file.vlrs) {
+    std::memcpy(&bytes[at_vlr + 2], vlr.user.data(), std::min<std::size_t>(vlr.user.size(), 16));
+    put_at<std::uint16_t>(bytes, at_vlr + 18, vlr.record_id);
+    put_at<std::uint16_t>(bytes, at_vlr + 20, static_cast<std::uint16_t>(vlr.payload.size()));
+    if (!vlr.payload.empty()) std::memcpy(&bytes[at_vlr + 54], vlr.payload.data(), vlr.payload.size());
+    at_vlr += 54 + vlr.payload.size();
   }
   static const std::size_t rgb_offsets[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30};
   for (std::size_t i = 0; i < file.points.size(); ++i) {

@@ -10,6 +10,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include <cmath>
 #include <functional>
 #include <set>
@@ -19,6 +21,7 @@ namespace {
 
 using testing::las_test_bytes;
 using testing::LasTestFile;
+using testing::LasTestVlr;
 using testing::random_las_points;
 using testing::ScratchDirectory;
 using ::testing::HasSubstr;
@@ -246,6 +249,92 @@ TEST(LasReader, EmptyFileOfZeroPointsIsAnEmptyCloud) {
   EXPECT_TRUE(read_point_cloud(path).empty());
 }
 
+// A GeoKeyDirectory record (LASF_Projection 34735): header (1, 1, 0, count) then (id, location, count, value) per key.
+LasTestVlr geo_keys(const std::vector<std::array<std::uint16_t, 4>>& keys, std::uint16_t declared_count = 0) {
+  std::vector<std::uint16_t> words = {1, 1, 0, declared_count ? declared_count : static_cast<std::uint16_t>(keys.size())};
+  for (const auto& key : keys) words.insert(words.end(), key.begin(), key.end());
+  LasTestVlr vlr;
+  vlr.record_id = 34735;
+  vlr.payload.assign(reinterpret_cast<const char*>(words.data()), 2 * words.size());
+  return vlr;
+}
+
+LasHeader header_with(const ScratchDirectory& scratch, const std::vector<LasTestVlr>& vlrs, const std::string& name) {
+  LasTestFile file;
+  file.vlrs = vlrs;
+  file.points = random_las_points(5, 3);
+  const std::string path = scratch.file(name);
+  testing::write_bytes(path, las_test_bytes(file));
+  EXPECT_EQ(read_point_cloud(path).size(), 5u) << "the points are read whatever the CRS records say";
+  return read_las_header(path);
+}
+
+TEST(LasUnits, GeoKeysGiveTheLinearAndVerticalUnits) {
+  ScratchDirectory scratch;
+  const LasHeader survey = header_with(scratch, {geo_keys({{{1024, 0, 1, 1}}, {{3076, 0, 1, 9003}}, {{4099, 0, 1, 9001}}})}, "survey.las");
+  EXPECT_EQ(survey.units.source, "GeoTIFF keys");
+  EXPECT_EQ(survey.units.horizontal_name, "US survey foot");
+  EXPECT_DOUBLE_EQ(survey.units.horizontal_metres, 1200.0 / 3937.0);
+  EXPECT_EQ(survey.units.vertical_name, "metre");
+  EXPECT_DOUBLE_EQ(survey.units.vertical_metres, 1.0);
+  EXPECT_FALSE(survey.units.geographic);
+  // A user-defined unit: 3076 = 32767 and its size in metres among the double parameters (34736).
+  LasTestVlr doubles;
+  doubles.record_id = 34736;
+  const double values[2] = {7.0, 0.5};
+  doubles.payload.assign(reinterpret_cast<const char*>(values), sizeof(values));
+  const LasHeader user = header_with(scratch, {geo_keys({{{3076, 0, 1, 32767}}, {{3077, 34736, 1, 1}}}), doubles}, "user.las");
+  EXPECT_DOUBLE_EQ(user.units.horizontal_metres, 0.5);
+  // Longitude and latitude: geographic, no metres per unit.
+  const LasHeader geographic = header_with(scratch, {geo_keys({{{1024, 0, 1, 2}}})}, "geographic.las");
+  EXPECT_TRUE(geographic.units.geographic);
+  EXPECT_EQ(geographic.units.horizontal_metres, 0.0);
+  // No CRS record at all.
+  EXPECT_TRUE(header_with(scratch, {}, "plain.las").units.source.empty());
+}
+
+TEST(LasUnits, WktGivesTheProjectedUnitNotTheGeographicOne) {
+  ScratchDirectory scratch;
+  LasTestVlr wkt;
+  wkt.record_id = 2112;
+  wkt.payload = R"(COMPD_CS["x",PROJCS["y",GEOGCS["g",DATUM["d",SPHEROID["s",6378137,298.25]],PRIMEM["Greenwich",0],)"
+                R"(UNIT["degree",0.0174532925199433]],PROJECTION["Transverse_Mercator"],PARAMETER["k",0.9996],)"
+                R"(UNIT["metre",1,AUTHORITY["EPSG","9001"]]],VERT_CS["v",VERT_DATUM["n",2005],UNIT["foot",0.3048]]])";
+  wkt.payload += '\0';
+  // The WKT wins over GeoTIFF keys that say otherwise (LAS 1.4 makes the WKT the required form).
+  const LasHeader header = header_with(scratch, {geo_keys({{{3076, 0, 1, 9002}}}), wkt}, "wkt.las");
+  EXPECT_EQ(header.units.source, "WKT");
+  EXPECT_EQ(header.units.horizontal_name, "metre");
+  EXPECT_DOUBLE_EQ(header.units.horizontal_metres, 1.0);
+  EXPECT_EQ(header.units.vertical_name, "foot");
+  EXPECT_DOUBLE_EQ(header.units.vertical_metres, 0.3048);
+}
+
+TEST(LasUnits, MalformedCrsRecordsLeaveTheUnitsUndeclaredAndThePointsRead) {
+  ScratchDirectory scratch;
+  // A key directory that claims 1,000 keys but holds 3: the 3 it holds are read, nothing past them.
+  const LasHeader claims = header_with(scratch, {geo_keys({{{3076, 0, 1, 9002}}, {{4099, 0, 1, 9001}}, {{1024, 0, 1, 1}}}, 1000)}, "claims.las");
+  EXPECT_DOUBLE_EQ(claims.units.horizontal_metres, 0.3048);
+  // A double parameter index past the doubles; an unknown unit code; a WKT cut off inside PROJCS; a
+  // WKT unit that is not a number; a key directory of one byte.
+  LasTestVlr cut, not_a_number, odd;
+  cut.record_id = not_a_number.record_id = 2112;
+  cut.payload = R"(PROJCS["y",GEOGCS["g",UNIT["degree",0.01745]],UNIT["metre")";
+  not_a_number.payload = R"(PROJCS["y",UNIT["metre",abc]])";
+  odd.record_id = 34735;
+  odd.payload = "\x01";
+  for (const auto& [vlrs, name] : std::vector<std::pair<std::vector<LasTestVlr>, std::string>>{
+           {{geo_keys({{{3076, 0, 1, 32767}}, {{3077, 34736, 1, 40}}})}, "index.las"},
+           {{geo_keys({{{3076, 0, 1, 9999}}})}, "unknown.las"},
+           {{cut}, "cut.las"},
+           {{not_a_number}, "nan.las"},
+           {{odd}, "odd.las"}}) {
+    const LasHeader header = header_with(scratch, vlrs, name);
+    EXPECT_EQ(header.units.horizontal_metres, 0.0) << name;
+    EXPECT_TRUE(header.units.horizontal_name.empty()) << name;
+  }
+}
+
 // The real airborne tile: 110,000 points in international feet, state plane; ground and unclassified.
 TEST(LasReader, SharedAutzenTile) {
   QUADRIX_REQUIRE_SHARED_DATA("als_autzen/autzen_trim.las");
@@ -253,6 +342,8 @@ TEST(LasReader, SharedAutzenTile) {
   const LasHeader header = read_las_header(path);
   EXPECT_EQ(header.version_minor, 2);
   EXPECT_EQ(header.point_count, 110000u);
+  EXPECT_EQ(header.units.horizontal_name, "foot");
+  EXPECT_DOUBLE_EQ(header.units.horizontal_metres, 0.3048);
   CloudReadOptions options;
   options.local_origin = LocalOrigin::Auto;
   CloudReadReport report;
