@@ -400,13 +400,15 @@ LAS_BASE_SIZES = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67]
 LAS_RGB_OFFSETS = [0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30]
 
 
-def las_file(minor, point_format, points, extra_bytes=0, vlr=b"", scale=(0.01, 0.01, 0.01), offset=(0.0, 0.0, 0.0)):
-    """A LAS file of integer points [(X, Y, Z, intensity, class)] with a correct header."""
+def las_file(minor, point_format, points, extra_bytes=0, vlr=b"", scale=(0.01, 0.01, 0.01), offset=(0.0, 0.0, 0.0),
+             projection=()):
+    """A LAS file of integer points [(X, Y, Z, intensity, class)] with a correct header; `vlr` is the
+    payload of one WKT record, `projection` further LASF_Projection records [(record id, payload)]."""
     header_size = 227 if minor <= 2 else 235 if minor == 3 else 375
     record = LAS_BASE_SIZES[point_format] + extra_bytes
-    vlrs = b""
-    if vlr:
-        vlrs = struct.pack("<H16sHH32s", 0, b"LASF_Projection", 2112, len(vlr), b"fuzz seed") + vlr
+    records = ([(2112, vlr)] if vlr else []) + list(projection)
+    vlrs = b"".join(struct.pack("<H16sHH32s", 0, b"LASF_Projection", record_id, len(payload), b"fuzz seed") + payload
+                    for record_id, payload in records)
     offset_to_points = header_size + len(vlrs)
     coordinates = [[p[axis] * scale[axis] + offset[axis] for p in points] for axis in range(3)]
     low = [min(c) if c else 0.0 for c in coordinates]
@@ -417,7 +419,7 @@ def las_file(minor, point_format, points, extra_bytes=0, vlr=b"", scale=(0.01, 0
     header[24] = 1
     header[25] = minor
     header[26:38] = b"quadrix fuzz"
-    struct.pack_into("<HIIBHI", header, 94, header_size, offset_to_points, 1 if vlr else 0, point_format, record, legacy)
+    struct.pack_into("<HIIBHI", header, 94, header_size, offset_to_points, len(records), point_format, record, legacy)
     struct.pack_into("<3d", header, 131, *scale)
     struct.pack_into("<3d", header, 155, *offset)
     struct.pack_into("<6d", header, 179, high[0], low[0], high[1], low[1], high[2], low[2])
@@ -450,6 +452,14 @@ def las_files():
                                                                   vlr=b"\x01\x02" if point_format % 2 else b"")
     utm = las_file(4, 6, points, scale=(0.001, 0.001, 0.001), offset=(500000.0, 5400000.0, 100.0))
     seeds["utm_1_4.las"] = utm
+    # Coordinate units: GeoTIFF keys (projected, international foot, vertical metre, a user-defined
+    # unit size among the double parameters) and a compound WKT with a projected and a vertical unit.
+    keys = struct.pack("<24H", 1, 1, 0, 5, 1024, 0, 1, 1, 3076, 0, 1, 9002, 3077, 34736, 1, 0, 4099, 0, 1, 9001,
+                       2052, 0, 1, 9003)
+    seeds["geokeys_feet_1_2.las"] = las_file(2, 1, points, projection=[(34735, keys), (34736, struct.pack("<2d", 0.3048, 1.0))])
+    wkt = (b'COMPD_CS["c",PROJCS["p",GEOGCS["g",UNIT["degree",0.0174532925199433]],PROJECTION["Transverse_Mercator"],'
+           b'UNIT["metre",1]],VERT_CS["v",VERT_DATUM["d",2005],UNIT["US survey foot",0.304800609601219]]]\x00')
+    seeds["wkt_compound_1_4.las"] = las_file(4, 6, points, vlr=wkt)
     seeds["empty_1_3.las"] = las_file(3, 1, [])
     seeds["truncated_points.las"] = las_file(2, 1, points)[:-9]
     lying = bytearray(las_file(4, 7, points))

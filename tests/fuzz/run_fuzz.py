@@ -35,6 +35,7 @@ DICTIONARIES = {
     "kitti_calibration": "kitti_calibration.dict",
     "scene_model_json": "scene_model_json.dict",
     "registration_config": "registration_config.dict",
+    "las": "las.dict",
 }
 
 FAILURE_KINDS = [
