@@ -6,6 +6,7 @@ quadrix executable as third argument, also runs `quadrix map --scheduler` agains
     python3 dask_map_script.py SCANS.tsv OPTIONS.json [QUADRIX_EXECUTABLE OUT_FOLDER]
 """
 import json
+import pathlib
 import subprocess
 import sys
 import time
@@ -19,6 +20,7 @@ def summary(result, seconds):
 
 
 if __name__ == "__main__":
+    import numpy as np
     from distributed import Client, LocalCluster
 
     import quadrix
@@ -30,6 +32,17 @@ if __name__ == "__main__":
         client.wait_for_workers(2)
         start = time.perf_counter()
         on_cluster = summary(quadrix.map(scans, client=client, **options), time.perf_counter() - start)
+        # A worker's error comes back as the same ValueError naming the row.
+        bad = pathlib.Path(scans).with_name("bad_scans.tsv")
+        small = pathlib.Path(scans).with_name("small.ply")
+        quadrix.write_cloud(small, np.zeros((50, 3), dtype=np.float32) + np.arange(50, dtype=np.float32)[:, None])
+        first = pathlib.Path(scans).read_text().splitlines()[1].split("\t")
+        bad.write_text("session\tscan\todometry\na\t%s\t-\na\tsmall.ply\t-\n" % first[1])
+        try:
+            quadrix.map(str(bad), client=client)
+            worker_error = None
+        except ValueError as error:
+            worker_error = str(error)
         command = None
         if len(sys.argv) > 4:
             arguments = [sys.argv[3], "map", scans, "--out", sys.argv[4], "--scheduler", cluster.scheduler_address]
@@ -39,4 +52,4 @@ if __name__ == "__main__":
                     arguments += [flag, str(options[key])]
             run = subprocess.run(arguments, capture_output=True, text=True)
             command = {"code": run.returncode, "stdout": run.stdout, "stderr": run.stderr[-3000:]}
-    print(json.dumps({"process": in_process, "cluster": on_cluster, "command": command}))
+    print(json.dumps({"process": in_process, "cluster": on_cluster, "command": command, "worker_error": worker_error}))

@@ -88,6 +88,8 @@ def test_dask_local_cluster_and_the_command_give_the_same_map(walk, tmp_path):
         assert {k: mine[k] for k in ("from", "to", "kind", "status", "used")} == {k: theirs[k] for k in ("from", "to", "kind", "status", "used")}
         np.testing.assert_allclose(theirs["transform"], mine["transform"], rtol=0, atol=1e-12)
     np.testing.assert_allclose(cluster["poses"], process["poses"], rtol=0, atol=1e-9)
+    assert result["worker_error"] is not None and "row 3 (small.ply)" in result["worker_error"], result["worker_error"]
+    assert "at least 100" in result["worker_error"]
     if result["command"] is not None:
         assert result["command"]["code"] == 0, result["command"]["stderr"]
         table = [line.split("\t") for line in (tmp_path / "command_map" / "poses.tsv").read_text().splitlines()[1:]]
