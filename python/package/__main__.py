@@ -8,6 +8,7 @@ and the pose graph is solved here. Exit code 2 on bad input or when Dask is miss
 
 import argparse
 import sys
+import time
 
 
 def _parser():
@@ -61,14 +62,29 @@ def main(argv=None):
         except (OSError, TimeoutError) as error:
             print("error: --scheduler: cannot reach the Dask scheduler at %s: %s" % (arguments.scheduler, error), file=sys.stderr)
             return 2
+    started = time.monotonic()
+
+    def progress(stage, done, total):
+        """The command line's progress line (on a terminal only)."""
+        seconds = time.monotonic() - started
+        if total > 0 and done > 0:
+            line = "%s: %d / %d (%.0f s, about %.0f s left in this stage)" % (stage, done, total, seconds, seconds * (total / done - 1.0))
+        else:
+            line = "%s: %d (%.0f s)" % (stage, done, seconds)
+        sys.stderr.write("\r" + line + "   ")
+        sys.stderr.flush()
+
     try:
-        result = quadrix.map(arguments.scans, arguments.out, client=client, gt=arguments.gt, **_options(arguments))
+        result = quadrix.map(arguments.scans, arguments.out, client=client, gt=arguments.gt,
+                             progress=progress if sys.stderr.isatty() else None, **_options(arguments))
     except (ValueError, FileNotFoundError, KeyError, TypeError) as error:
         print("error: %s" % error, file=sys.stderr)
         return 2
     finally:
         if client is not None:
             client.close()
+        if sys.stderr.isatty():
+            sys.stderr.write("\n")
 
     edges = result.edges
     loops = [edge for edge in edges if edge["kind"] == "loop"]

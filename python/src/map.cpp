@@ -322,7 +322,8 @@ def _map_register_task(from_entry, to_entry, kind, guess, from_model, to_model, 
 
   module.def(
       "map",
-      [module](const py::object& scans, const py::object& out, const py::object& client, const py::object& gt, const py::kwargs& keywords) {
+      [module](const py::object& scans, const py::object& out, const py::object& client, const py::object& gt,
+               const py::object& progress, const py::kwargs& keywords) {
         const py::dict options_dict = keywords;
         const MapOptions options = map_options_from(options_dict);
         const ScanList list = scan_list_from(scans);
@@ -382,9 +383,16 @@ def _map_register_task(from_entry, to_entry, kind, guess, from_model, to_model, 
             return edges;
           };
         }
+        // Progress from whichever thread reports it (TBB's in this process), with the GIL taken for the call.
+        MapProgress report;
+        if (!progress.is_none())
+          report = [&progress](const std::string& stage, std::size_t done, std::size_t total) {
+            py::gil_scoped_acquire acquire;
+            progress(stage, done, total);
+          };
         {
           py::gil_scoped_release release;
-          run->result = map_scans(list, options, {}, executor);
+          run->result = map_scans(list, options, report, executor);
           if (!truth.empty()) {
             run->evaluation = evaluate_map(run->result, truth, 30.0, options.minimum_loop_travel);
             run->evaluation_json = map_evaluation_json(*run->evaluation);
@@ -398,6 +406,7 @@ def _map_register_task(from_entry, to_entry, kind, guess, from_model, to_model, 
         return run;
       },
       py::arg("scans"), py::arg("out") = py::none(), py::kw_only(), py::arg("client") = py::none(), py::arg("gt") = py::none(),
+      py::arg("progress") = py::none(),
       R"doc(
 One map from many scans (quadrix map): every scan modelled once, odometry given or registered scan
 to scan, loop candidates by radius search within sessions and by a place descriptor across them,
@@ -411,6 +420,8 @@ client: a dask.distributed Client: each scan's modelling and each pair's registr
 on its workers, which read the clouds from the list's paths (a filesystem they all share); models
 travel between tasks as bytes; the pose graph is solved here. The same map as without a client.
 gt: true poses (poses.tsv format): the evaluation (ATE, RPE, loop-edge precision and recall).
+progress: called as progress(stage, done, total) as scans are modelled and pairs registered
+(total 0 when not known ahead), from the thread that reports it.
 Keyword options: the members of MapOptions (preset, loop_radius, loop_radius_growth,
 maximum_loop_radius, minimum_loop_travel, candidates_per_scan, minimum_candidate_spacing,
 place_candidates_per_scan, place_query_stride, register_consecutive, use_ambiguous_edges,

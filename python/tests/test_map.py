@@ -42,7 +42,10 @@ def walk(shared_data, tmp_path_factory):
 
 def test_map_in_process_writes_the_folder_and_evaluates(walk, tmp_path):
     rows, _, truth = walk
-    result = quadrix.map(rows, tmp_path / "map", gt=truth, **OPTIONS)
+    reports = []
+    result = quadrix.map(rows, tmp_path / "map", gt=truth, progress=lambda *report: reports.append(report), **OPTIONS)
+    assert ("scans modelled", 8, 8) in reports
+    assert ("consecutive scans registered", 2, 2) in reports
     assert result.poses.shape == (8, 4, 4)
     assert result.sessions == ["a"] * 5 + ["b"] * 3
     kinds = [(edge["kind"], edge["status"]) for edge in result.edges]
