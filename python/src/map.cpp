@@ -18,6 +18,7 @@
 #include <optional>
 #include <cctype>
 #include <sstream>
+#include <stdlib.h>
 #include <unistd.h>
 
 namespace quadrix::python {
@@ -41,28 +42,33 @@ MapOptions map_options_from(const py::dict& keywords) {
   for (const auto& item : keywords) {
     const std::string key = item.first.cast<std::string>();
     const py::handle value = item.second;
-    if (key == "preset") options.preset = value.cast<std::string>();
-    else if (key == "maximum_median_range") options.maximum_median_range = value.cast<double>();
-    else if (key == "loop_radius") options.loop_radius = value.cast<double>();
-    else if (key == "loop_radius_growth") options.loop_radius_growth = value.cast<double>();
-    else if (key == "maximum_loop_radius") options.maximum_loop_radius = value.cast<double>();
-    else if (key == "minimum_loop_travel") options.minimum_loop_travel = value.cast<double>();
-    else if (key == "candidates_per_scan") options.candidates_per_scan = value.cast<std::size_t>();
-    else if (key == "minimum_candidate_spacing") options.minimum_candidate_spacing = value.cast<double>();
-    else if (key == "place_candidates_per_scan") options.place_candidates_per_scan = value.cast<std::size_t>();
-    else if (key == "place_query_stride") options.place_query_stride = value.cast<std::size_t>();
-    else if (key == "register_consecutive") options.register_consecutive = value.cast<bool>();
-    else if (key == "use_ambiguous_edges") options.use_ambiguous_edges = value.cast<bool>();
-    else if (key == "loop_translation_sigma") options.loop_translation_sigma = value.cast<double>();
-    else if (key == "loop_rotation_sigma_degrees") options.loop_rotation_sigma_degrees = value.cast<double>();
-    else if (key == "odometry_translation_drift") options.odometry_translation_drift = value.cast<double>();
-    else if (key == "odometry_rotation_drift_degrees") options.odometry_rotation_drift_degrees = value.cast<double>();
-    else if (key == "odometry_translation_floor") options.odometry_translation_floor = value.cast<double>();
-    else if (key == "odometry_rotation_floor_degrees") options.odometry_rotation_floor_degrees = value.cast<double>();
-    else if (key == "map_voxel") options.map_voxel = value.cast<double>();
-    else if (key == "cloud_cache") options.cloud_cache = value.cast<std::size_t>();
-    else if (key == "config") config = py::reinterpret_borrow<py::object>(value);
-    else throw py::type_error("map() got an unexpected keyword argument '" + key + "'");
+    try {
+      if (key == "preset") options.preset = value.cast<std::string>();
+      else if (key == "maximum_median_range") options.maximum_median_range = value.cast<double>();
+      else if (key == "loop_radius") options.loop_radius = value.cast<double>();
+      else if (key == "loop_radius_growth") options.loop_radius_growth = value.cast<double>();
+      else if (key == "maximum_loop_radius") options.maximum_loop_radius = value.cast<double>();
+      else if (key == "minimum_loop_travel") options.minimum_loop_travel = value.cast<double>();
+      else if (key == "candidates_per_scan") options.candidates_per_scan = value.cast<std::size_t>();
+      else if (key == "minimum_candidate_spacing") options.minimum_candidate_spacing = value.cast<double>();
+      else if (key == "place_candidates_per_scan") options.place_candidates_per_scan = value.cast<std::size_t>();
+      else if (key == "place_query_stride") options.place_query_stride = value.cast<std::size_t>();
+      else if (key == "register_consecutive") options.register_consecutive = value.cast<bool>();
+      else if (key == "use_ambiguous_edges") options.use_ambiguous_edges = value.cast<bool>();
+      else if (key == "loop_translation_sigma") options.loop_translation_sigma = value.cast<double>();
+      else if (key == "loop_rotation_sigma_degrees") options.loop_rotation_sigma_degrees = value.cast<double>();
+      else if (key == "odometry_translation_drift") options.odometry_translation_drift = value.cast<double>();
+      else if (key == "odometry_rotation_drift_degrees") options.odometry_rotation_drift_degrees = value.cast<double>();
+      else if (key == "odometry_translation_floor") options.odometry_translation_floor = value.cast<double>();
+      else if (key == "odometry_rotation_floor_degrees") options.odometry_rotation_floor_degrees = value.cast<double>();
+      else if (key == "map_voxel") options.map_voxel = value.cast<double>();
+      else if (key == "cloud_cache") options.cloud_cache = value.cast<std::size_t>();
+      else if (key == "config") config = py::reinterpret_borrow<py::object>(value);
+      else throw py::type_error("map() got an unexpected keyword argument '" + key + "'");
+    } catch (const py::cast_error&) {
+      throw Error("map: option " + key + "=" + py::repr(value).cast<std::string>() +
+                  ": expected a number (a non-negative integer for counts, a string for preset, a bool for switches)");
+    }
   }
   if (!config.is_none()) {
     if (options.preset == "auto") throw Error("map: config= applies to a named preset (preset='vlp64', ...), not auto");
@@ -124,9 +130,9 @@ ScanList scan_list_from(const py::handle& scans) {
     ++entry;
   }
   if (entry == 0) throw Error("map: the scan list is empty");
-  const std::filesystem::path folder = std::filesystem::temp_directory_path() /
-                                       ("quadrix_map_list_" + std::to_string(::getpid()) + "_" + std::to_string(reinterpret_cast<std::uintptr_t>(&text)));
-  std::filesystem::create_directories(folder);
+  std::string pattern = (std::filesystem::temp_directory_path() / "quadrix_map_list_XXXXXX").string();
+  if (::mkdtemp(pattern.data()) == nullptr) throw Error("map: cannot create a temporary folder for the scan list in " + pattern);
+  const std::filesystem::path folder = pattern;
   const std::string file = (folder / "scans.tsv").string();
   { std::ofstream(file) << text.str(); }
   try {

@@ -69,6 +69,8 @@ def test_bad_input_names_the_entry(walk):
         quadrix.map([rows[0], ("a", "/nonexistent/scan.ply", rows[1][2])] + rows[2:])
     with pytest.raises(TypeError, match="loop_radiuss"):
         quadrix.map(rows, loop_radiuss=3.0)
+    with pytest.raises(ValueError, match="candidates_per_scan=-1"):
+        quadrix.map(rows, candidates_per_scan=-1)
 
 
 def test_dask_local_cluster_and_the_command_give_the_same_map(walk, tmp_path):
