@@ -129,7 +129,52 @@ double median_range(const PointCloud& cloud) {
   return *middle;
 }
 
-/// Models every scan once, in parallel; errors name the row.
+/// The registration options of one scan: the fixed ones, or its preset (`auto` measured on the
+/// cloud); `preset` receives the name or auto's reasons.
+RegistrationOptions scan_registration_options(const PointCloud& cloud, const MapOptions& options, std::string& preset) {
+  if (options.registration_options) {
+    preset = "fixed options";
+    return *options.registration_options;
+  }
+  std::string notes;
+  RegistrationOptions resolved = resolve_registration_side(options.preset, cloud, "scan", &notes);
+  preset = notes.empty() ? options.preset : notes;
+  return resolved;
+}
+
+/// Models scan `index` of `list`; errors name the row.
+ScanModel model_one_scan(const ScanList& list, std::size_t index, const MapOptions& options) {
+  const ScanEntry& entry = list.scans[index];
+  const std::string where = list.source + ": row " + std::to_string(entry.row) + " (" + entry.scan + "): ";
+  PointCloud cloud;
+  try {
+    cloud = read_point_cloud(entry.path);
+  } catch (const Error& error) {
+    throw Error(where + error.what());
+  }
+  if (cloud.size() < 100) throw Error(where + "the scan holds " + std::to_string(cloud.size()) + " points; at least 100 are needed");
+  const double range = median_range(cloud);
+  if (range > options.maximum_median_range)
+    throw Error(where + "the median point lies " + std::to_string(static_cast<long long>(range)) +
+                " m from the sensor (more than " + std::to_string(static_cast<long long>(options.maximum_median_range)) +
+                " m): expected metres; is the scan in millimetres?");
+  ScanModel scan;
+  const RegistrationOptions resolved = scan_registration_options(cloud, options, scan.preset);
+  scan.options = resolved;
+  const Clock::time_point start = Clock::now();
+  ModellingResult modelling = model_scene(cloud, resolved.source_extraction, resolved.modelling);
+  if (modelling.model.augmented_count() == 0 && resolved.correspondences.match_augmented_points) {
+    ModellingResult augmented = modelling;
+    augment_scene_model(cloud.positions.cast<double>(), augmented, resolved.modelling);
+    if (augmented.model.augmented_count() > 0) scan.augmented = std::move(augmented.model);
+  }
+  scan.modelling_ms = elapsed_ms(start);
+  scan.model = std::move(modelling.model);
+  scan.descriptor = ring_descriptor(cloud, resolved.source_extraction.up);
+  return scan;
+}
+
+/// Models every scan once, in parallel; errors name the row (the first failing one).
 std::vector<ScanModel> model_scans(const ScanList& list, const MapOptions& options, const MapProgress& progress) {
   std::vector<ScanModel> models(list.scans.size());
   std::mutex mutex;
@@ -137,42 +182,8 @@ std::vector<ScanModel> model_scans(const ScanList& list, const MapOptions& optio
   std::string first_error;
   std::size_t first_error_scan = list.scans.size();
   tbb::parallel_for(std::size_t{0}, list.scans.size(), [&](std::size_t index) {
-    const ScanEntry& entry = list.scans[index];
-    const std::string where = list.source + ": row " + std::to_string(entry.row) + " (" + entry.scan + "): ";
     try {
-      PointCloud cloud;
-      try {
-        cloud = read_point_cloud(entry.path);
-      } catch (const Error& error) {
-        throw Error(where + error.what());
-      }
-      if (cloud.size() < 100) throw Error(where + "the scan holds " + std::to_string(cloud.size()) + " points; at least 100 are needed");
-      const double range = median_range(cloud);
-      if (range > options.maximum_median_range)
-        throw Error(where + "the median point lies " + std::to_string(static_cast<long long>(range)) +
-                    " m from the sensor (more than " + std::to_string(static_cast<long long>(options.maximum_median_range)) +
-                    " m): expected metres; is the scan in millimetres?");
-      ScanModel& scan = models[index];
-      RegistrationOptions resolved;
-      if (options.registration_options) {
-        resolved = *options.registration_options;
-        scan.preset = "fixed options";
-      } else {
-        std::string notes;
-        resolved = resolve_registration_side(options.preset, cloud, "scan", &notes);
-        scan.preset = notes.empty() ? options.preset : notes;
-      }
-      scan.options = resolved;
-      const Clock::time_point start = Clock::now();
-      ModellingResult modelling = model_scene(cloud, resolved.source_extraction, resolved.modelling);
-      if (modelling.model.augmented_count() == 0 && resolved.correspondences.match_augmented_points) {
-        ModellingResult augmented = modelling;
-        augment_scene_model(cloud.positions.cast<double>(), augmented, resolved.modelling);
-        if (augmented.model.augmented_count() > 0) scan.augmented = std::move(augmented.model);
-      }
-      scan.modelling_ms = elapsed_ms(start);
-      scan.model = std::move(modelling.model);
-      scan.descriptor = ring_descriptor(cloud, resolved.source_extraction.up);
+      models[index] = model_one_scan(list, index, options);
     } catch (const Error& error) {
       std::lock_guard<std::mutex> lock(mutex);
       if (index < first_error_scan) {
@@ -187,6 +198,29 @@ std::vector<ScanModel> model_scans(const ScanList& list, const MapOptions& optio
   });
   if (first_error_scan < list.scans.size()) throw Error(first_error);
   return models;
+}
+
+/// What a worker returns of a scan model (everything but the options, which follow from the cloud).
+MappedScan mapped_of(const ScanModel& scan) {
+  MappedScan mapped;
+  mapped.model = scan.model;
+  mapped.augmented = scan.augmented;
+  mapped.descriptor = scan.descriptor;
+  mapped.preset = scan.preset;
+  mapped.modelling_ms = scan.modelling_ms;
+  return mapped;
+}
+
+/// The cached model of a scan from what a worker returned (`options`: its registration options when known).
+ScanModel scan_model_of(MappedScan mapped, const RegistrationOptions& options = {}) {
+  ScanModel scan;
+  scan.model = std::move(mapped.model);
+  scan.augmented = std::move(mapped.augmented);
+  scan.options = options;
+  scan.descriptor = std::move(mapped.descriptor);
+  scan.preset = std::move(mapped.preset);
+  scan.modelling_ms = mapped.modelling_ms;
+  return scan;
 }
 
 /// Registration of one pair from the cached models, verified on the clouds.
@@ -260,6 +294,14 @@ MapEdge register_consecutive(std::size_t from, std::size_t to, const Eigen::Isom
   return edge;
 }
 
+/// One requested registration from the cached models: consecutive scans from their local guess,
+/// anything else globally.
+MapEdge register_request(const MapPairRequest& pair, const std::vector<ScanModel>& models, CloudCache& clouds,
+                         const MapOptions& options) {
+  if (pair.local_guess) return register_consecutive(pair.from, pair.to, *pair.local_guess, models, clouds, options);
+  return register_pair(pair.from, pair.to, pair.kind, models, clouds, options);
+}
+
 /// Distance travelled along a session's odometry from scan `first` to scan `last` (indices into poses).
 std::vector<double> path_lengths(const std::vector<Eigen::Isometry3d>& poses, std::size_t begin, std::size_t end) {
   std::vector<double> length(end - begin, 0.0);
@@ -270,7 +312,35 @@ std::vector<double> path_lengths(const std::vector<Eigen::Isometry3d>& poses, st
 
 }  // namespace
 
-MapResult map_scans(const ScanList& input, const MapOptions& options, const MapProgress& progress) {
+MappedScan model_map_scan(const ScanList& list, std::size_t index, const MapOptions& options) {
+  if (index >= list.scans.size()) throw Error(list.source + ": no scan " + std::to_string(index) + " in the list");
+  return mapped_of(model_one_scan(list, index, options));
+}
+
+MapEdge register_map_pair(const ScanList& list, const MapPairRequest& pair, const MappedScan& from, const MappedScan& to,
+                          const MapOptions& options) {
+  if (pair.from >= list.scans.size() || pair.to >= list.scans.size() || pair.from == pair.to)
+    throw Error(list.source + ": no pair " + std::to_string(pair.from) + " -> " + std::to_string(pair.to) + " in the list");
+  // The two scans as a list of their own, so the pair's clouds are read once into a cache of two;
+  // each side's options resolved from its cloud as modelling resolved them.
+  ScanList two;
+  two.source = list.source;
+  two.scans = {list.scans[pair.from], list.scans[pair.to]};
+  CloudCache clouds(two, 2);
+  std::vector<ScanModel> models;
+  std::string preset;
+  models.push_back(scan_model_of(from, scan_registration_options(*clouds.get(0), options, preset)));
+  models.push_back(scan_model_of(to, scan_registration_options(*clouds.get(1), options, preset)));
+  MapPairRequest local = pair;
+  local.from = 0;
+  local.to = 1;
+  MapEdge edge = register_request(local, models, clouds, options);
+  edge.from = pair.from;
+  edge.to = pair.to;
+  return edge;
+}
+
+MapResult map_scans(const ScanList& input, const MapOptions& options, const MapProgress& progress, const MapExecutor& executor) {
   const Clock::time_point run_start = Clock::now();
   MapResult result;
   result.list = input;
@@ -280,13 +350,51 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
 
   // Model every scan once (paper §"Quadric-based Scene Representation"); only the models stay in memory.
   Clock::time_point stage = Clock::now();
-  const std::vector<ScanModel> models = model_scans(list, options, progress);
+  std::vector<ScanModel> models;
+  if (executor.model) {
+    std::vector<std::size_t> every(count);
+    std::iota(every.begin(), every.end(), std::size_t{0});
+    std::vector<MappedScan> mapped = executor.model(every);
+    if (mapped.size() != count)
+      throw Error(list.source + ": the map executor returned " + std::to_string(mapped.size()) + " models for " +
+                  std::to_string(count) + " scans");
+    models.reserve(count);
+    for (MappedScan& scan : mapped) models.push_back(scan_model_of(std::move(scan)));
+    if (progress) progress("scans modelled", count, count);
+  } else {
+    models = model_scans(list, options, progress);
+  }
   result.timings_ms["modelling"] = elapsed_ms(stage);
   for (const ScanModel& model : models) {
     result.models.push_back(model.model);
     result.presets.push_back(model.preset);
   }
   CloudCache clouds(list, options.cloud_cache);
+  // Registers a batch of independent pairs: by the executor, or here in parallel from the cached
+  // models; `each_done` after every pair (in this process) or after the batch (executor).
+  const auto register_batch = [&](const std::vector<MapPairRequest>& pairs, const std::function<void()>& each_done) {
+    std::vector<MapEdge> found;
+    if (executor.register_pairs) {
+      found = executor.register_pairs(pairs);
+      if (found.size() != pairs.size())
+        throw Error(list.source + ": the map executor returned " + std::to_string(found.size()) + " edges for " +
+                    std::to_string(pairs.size()) + " pairs");
+      for (std::size_t k = 0; k < pairs.size(); ++k) {
+        if (found[k].from != pairs[k].from || found[k].to != pairs[k].to)
+          throw Error(list.source + ": the map executor answered pair " + std::to_string(k) + " with another pair's edge");
+        if (each_done) each_done();
+      }
+      return found;
+    }
+    found.resize(pairs.size());
+    std::mutex mutex;
+    tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t k) {
+      found[k] = register_request(pairs[k], models, clouds, options);
+      std::lock_guard<std::mutex> lock(mutex);
+      if (each_done) each_done();
+    });
+    return found;
+  };
 
   // Sessions as index ranges.
   std::vector<std::pair<std::size_t, std::size_t>> sessions;
@@ -316,8 +424,12 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     const bool continues = pair > 0 && consecutive[pair - 1].first + 1 == consecutive[pair].first &&
                            session_of[consecutive[pair - 1].first] == session_of[consecutive[pair].first];
     const bool answered = continues && (registered[pair - 1].status == "ok" || registered[pair - 1].status == "ambiguous");
-    const Eigen::Isometry3d guess = answered ? registered[pair - 1].transform : Eigen::Isometry3d::Identity();
-    registered[pair] = register_consecutive(consecutive[pair].first, consecutive[pair].second, guess, models, clouds, options);
+    MapPairRequest request;
+    request.from = consecutive[pair].first;
+    request.to = consecutive[pair].second;
+    request.kind = MapEdgeKind::Odometry;
+    request.local_guess = answered ? registered[pair - 1].transform : Eigen::Isometry3d::Identity();
+    registered[pair] = std::move(register_batch({request}, {}).front());
     if (progress) progress("consecutive scans registered", pair + 1, consecutive.size());
   }
   std::size_t next_registered = 0;
@@ -392,9 +504,9 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       if (chosen.empty()) continue;
       result.candidates_within += chosen.size();
       const Clock::time_point registration_start = Clock::now();
-      std::vector<MapEdge> found(chosen.size());
-      tbb::parallel_for(std::size_t{0}, chosen.size(),
-                        [&](std::size_t k) { found[k] = register_pair(index, chosen[k], MapEdgeKind::Loop, models, clouds, options); });
+      std::vector<MapPairRequest> requests(chosen.size());
+      for (std::size_t k = 0; k < chosen.size(); ++k) requests[k].from = index, requests[k].to = chosen[k];
+      std::vector<MapEdge> found = register_batch(requests, {});
       registration_ms += elapsed_ms(registration_start);
       registered_count += found.size();
       if (progress) progress("loop candidates registered", registered_count, 0);
@@ -432,15 +544,13 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     result.candidates_across = pairs.size();
     candidates_ms += elapsed_ms(candidates_start);
     const Clock::time_point registration_start = Clock::now();
-    std::vector<MapEdge> found(pairs.size());
-    std::mutex mutex;
+    std::vector<MapPairRequest> requests(pairs.size());
+    for (std::size_t pair = 0; pair < pairs.size(); ++pair) requests[pair].from = pairs[pair].first, requests[pair].to = pairs[pair].second;
     std::size_t done = 0;
-    tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t pair) {
-      found[pair] = register_pair(pairs[pair].first, pairs[pair].second, MapEdgeKind::Loop, models, clouds, options);
-      found[pair].across_sessions = true;
-      std::lock_guard<std::mutex> lock(mutex);
+    std::vector<MapEdge> found = register_batch(requests, [&] {
       if (progress) progress("place candidates registered", ++done, pairs.size());
     });
+    for (MapEdge& edge : found) edge.across_sessions = true;
     registration_ms += elapsed_ms(registration_start);
     for (MapEdge& edge : found) loop_edges.push_back(std::move(edge));
   }

@@ -103,9 +103,64 @@ struct MapResult {
 /// Progress callback: stage name, done, total.
 using MapProgress = std::function<void(const std::string& stage, std::size_t done, std::size_t total)>;
 
-/// Builds the map of `list` (every stage of the file comment). Throws quadrix::Error naming the row
-/// for an unreadable scan, an empty one or one in another unit.
-MapResult map_scans(const ScanList& list, const MapOptions& options = {}, const MapProgress& progress = {});
+/// What modelling keeps of one scan: what a worker returns for it (mapped_scan_to_bytes). The
+/// registration options of the scan are not part of it: they are a function of the cloud and the
+/// MapOptions (the preset, `auto` measured on the cloud), so whoever registers a pair resolves them
+/// again from the clouds it reads for verification.
+struct MappedScan {
+  SceneModel model;                      ///< as model_scene built it (sensor frame)
+  std::optional<SceneModel> augmented;   ///< the same with augmented points, when model_scene gave none and the preset matches them
+  Eigen::VectorXd descriptor;            ///< the bird's-eye ring descriptor of the scan (place recognition)
+  std::string preset;                    ///< preset name, or the auto choice's reasons
+  double modelling_ms = 0.0;             ///< model_scene time
+};
+
+/// One registration a map run asks for: `from` registered onto `to` (indices into ScanList::scans).
+struct MapPairRequest {
+  std::size_t from = 0;                           ///< source scan
+  std::size_t to = 0;                             ///< target scan
+  MapEdgeKind kind = MapEdgeKind::Loop;           ///< what the edge becomes
+  std::optional<Eigen::Isometry3d> local_guess;   ///< consecutive scans without odometry: point-to-plane ICP from this motion first, global registration when that is not ok
+};
+
+/// Who does the heavy work of map_scans. Both calls come from the thread that called map_scans, in
+/// batches whose results do not depend on each other (every scan at once; each scan's loop
+/// candidates within its session; every pair across sessions at once; one pair at a time along a
+/// chain of consecutive scans without odometry), so any executor that runs model_map_scan and
+/// register_map_pair (on any machine reading the same files) gives the same map. An empty member
+/// runs that part in this process (TBB), with the models kept in memory.
+struct MapExecutor {
+  /// Models the scans of these indices (model_map_scan each); returns their models in the same order.
+  std::function<std::vector<MappedScan>(const std::vector<std::size_t>& scans)> model;
+  /// Registers these pairs (register_map_pair each, from the models the `model` call returned);
+  /// returns their edges in the same order.
+  std::function<std::vector<MapEdge>(const std::vector<MapPairRequest>& pairs)> register_pairs;
+};
+
+/// Models scan `index` of `list` (reads its cloud; what a worker does per scan). Throws
+/// quadrix::Error naming the row for an unreadable scan, one of fewer than 100 points, or one whose
+/// median point lies farther than options.maximum_median_range (another unit).
+MappedScan model_map_scan(const ScanList& list, std::size_t index, const MapOptions& options);
+
+/// Registers `pair` from the two scans' models (`from`, `to`: what model_map_scan returned for them),
+/// verified on their clouds read from the list's paths (what a worker does per pair).
+MapEdge register_map_pair(const ScanList& list, const MapPairRequest& pair, const MappedScan& from, const MappedScan& to,
+                          const MapOptions& options);
+
+/// A MappedScan as bytes (the binary scene-model format for the models, little-endian numbers).
+std::string mapped_scan_to_bytes(const MappedScan& scan);
+/// Parses mapped_scan_to_bytes; throws quadrix::Error naming `source_name` when the bytes are not one.
+MappedScan mapped_scan_from_bytes(const std::string& bytes, const std::string& source_name = "<memory>");
+/// A MapEdge as bytes (every member, little-endian numbers).
+std::string map_edge_to_bytes(const MapEdge& edge);
+/// Parses map_edge_to_bytes; throws quadrix::Error naming `source_name` when the bytes are not one.
+MapEdge map_edge_from_bytes(const std::string& bytes, const std::string& source_name = "<memory>");
+
+/// Builds the map of `list` (every stage of the file comment), the scans modelled and the pairs
+/// registered by `executor` (default: in this process). Throws quadrix::Error naming the row for an
+/// unreadable scan, an empty one or one in another unit.
+MapResult map_scans(const ScanList& list, const MapOptions& options = {}, const MapProgress& progress = {},
+                    const MapExecutor& executor = {});
 
 /// Writes the outputs of `result` into `folder` atomically: they are written into a fresh sibling
 /// folder which then replaces `folder` (an existing `folder` is replaced only once everything is

@@ -18,6 +18,11 @@
 #include <optional>
 #include <string>
 #include <unistd.h>
+#include <sys/wait.h>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <vector>
 
 namespace quadrix::cli {
 namespace {
@@ -33,9 +38,61 @@ struct MapCommandOptions {
   MapOptions map;                ///< every option of the run
 };
 
+/// `quadrix map ... --scheduler ADDRESS`: the Dask path lives in the Python package, so the same
+/// arguments go to `python3 -m quadrix map` (the package of this build tree, else of the install) and
+/// its exit code becomes ours. QUADRIX_PYTHON overrides the interpreter.
+int run_on_scheduler(const MapCommandOptions& options) {
+  if (!options.kitti.empty()) throw Error("--scheduler: takes SCANS.tsv (write the KITTI folder's list as SCANS.tsv first), not --kitti");
+  if (options.scans.empty()) throw Error("give SCANS.tsv");
+  if (options.map.registration_options) throw Error("--scheduler: fixed registration options are not passed on");
+  const char* override_python = std::getenv("QUADRIX_PYTHON");
+  const std::string python = override_python != nullptr && *override_python != '\0' ? override_python : QUADRIX_MAP_PYTHON;
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::canonical("/proc/self/exe", error);
+  const std::filesystem::path tree = std::filesystem::weakly_canonical(QUADRIX_BUILD_TREE, error);
+  const bool in_tree = !self.empty() && self.string().rfind(tree.string() + "/", 0) == 0;
+  std::string python_path = in_tree ? QUADRIX_BUILD_PYTHON_PATH : QUADRIX_INSTALL_PYTHON_PATH;
+  if (const char* existing = std::getenv("PYTHONPATH"); existing != nullptr && *existing != '\0') python_path += std::string(":") + existing;
+  auto number = [](double value) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.17g", value);
+    return std::string(text);
+  };
+  std::vector<std::string> arguments = {python, "-m", "quadrix", "map", options.scans, "--out", options.out, "--scheduler", options.scheduler,
+                                        "--preset", options.map.preset, "--loop-radius", number(options.map.loop_radius),
+                                        "--loop-radius-growth", number(options.map.loop_radius_growth), "--minimum-loop-travel",
+                                        number(options.map.minimum_loop_travel), "--candidates-per-scan",
+                                        std::to_string(options.map.candidates_per_scan), "--place-candidates",
+                                        std::to_string(options.map.place_candidates_per_scan), "--map-voxel", number(options.map.map_voxel)};
+  if (!options.truth.empty()) arguments.insert(arguments.end(), {"--gt", options.truth});
+  if (!options.map.use_ambiguous_edges) arguments.push_back("--no-ambiguous-edges");
+  std::vector<char*> argv;
+  for (std::string& argument : arguments) argv.push_back(argument.data());
+  argv.push_back(nullptr);
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t child = fork();
+  if (child < 0) throw Error("--scheduler: cannot start " + python + ": " + std::strerror(errno));
+  if (child == 0) {
+    ::setenv("PYTHONPATH", python_path.c_str(), 1);
+    ::execvp(argv[0], argv.data());
+    std::fprintf(stderr, "error: --scheduler runs the Python package quadrix, but %s cannot be started: %s (set QUADRIX_PYTHON)\n",
+                 python.c_str(), std::strerror(errno));
+    std::_Exit(2);
+  }
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0)
+    if (errno != EINTR) throw Error(std::string("--scheduler: waiting for python: ") + std::strerror(errno));
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  return 1;
+}
+
 void run(const MapCommandOptions& options) {
-  if (!options.scheduler.empty())
-    throw Error("--scheduler: the command line maps in-process (TBB); distributed runs go through Python's quadrix.map(client=...)");
+  if (!options.scheduler.empty()) {
+    const int code = run_on_scheduler(options);
+    if (code != 0) std::exit(code);
+    return;
+  }
   if (options.scans.empty() == options.kitti.empty()) throw Error("give either SCANS.tsv or --kitti VELODYNE_FOLDER");
   const ScanList list = options.kitti.empty() ? read_scan_list(options.scans)
                                               : read_kitti_scan_list(options.kitti, options.kitti_poses, options.kitti_calibration);
@@ -113,7 +170,7 @@ const CommandRegistration registration(75, [](CLI::App& app) {
   command->add_option("--kitti-calib", options->kitti_calibration, "Its calib file: camera poses become LiDAR poses Tr^-1 P Tr");
   command->add_option("--out", options->out, "Output folder (replaced only once everything is written)")->required();
   command->add_option("--gt", options->truth, "True poses (poses.tsv format): ATE, RPE, loop-edge precision and recall");
-  command->add_option("--scheduler", options->scheduler, "Dask scheduler address (Python's quadrix.map only)");
+  command->add_option("--scheduler", options->scheduler, "Dask scheduler address: model and register on its workers (runs python3 -m quadrix map; needs python3-distributed)");
   command->add_option("--preset", options->map.preset, "Registration preset of every scan: vlp64|vlp16|mid360|avia|monument|auto");
   command->add_option("--loop-radius", options->map.loop_radius, "Radius of the loop search right after a loop, m");
   command->add_option("--loop-radius-growth", options->map.loop_radius_growth, "Radius growth per metre travelled since the last loop");

@@ -98,5 +98,6 @@ void bind_models(py::module_& module);    ///< Model, model, load_model, fit
 void bind_register(py::module_& module);  ///< RegistrationResult, register
 void bind_synth(py::module_& module);     ///< synth, scenes, sensors
 void bind_tiles(py::module_& module);     ///< model_tiles, merge_tiles, model_tiled
+void bind_map(py::module_& module);       ///< MapResult, map
 
 }  // namespace quadrix::python

@@ -18,6 +18,7 @@ Clouds are (N, 3) NumPy arrays, quadrix.Cloud objects or file paths.
   model, load_model, Model       the quadric scene model of a cloud (quadrix model)
   fit                            one quadric fitted to a segment (quadrix fit)
   synth, scenes, sensors         simulated scans of built-in scenes with ground truth (quadrix synth)
+  map, MapResult                 one map from many scans, in-process or on a Dask cluster (quadrix map)
   config, config_keys, config_schema, presets   the registration options (quadrix config)
 
 Errors: FileNotFoundError for missing files, KeyError for unknown config keys, ValueError for bad
@@ -34,6 +35,7 @@ input (the message names the file, line or key). Heavy calls release the GIL.
   quadrix::python::bind_config(module);
   quadrix::python::bind_models(module);
   quadrix::python::bind_tiles(module);
+  quadrix::python::bind_map(module);
   quadrix::python::bind_register(module);
   quadrix::python::bind_synth(module);
   module.attr("__version__") = QUADRIX_VERSION;

@@ -245,5 +245,153 @@ TEST(MappingBalm, WithoutOdometryConsecutiveScansAreRegistered) {
   EXPECT_LE(evaluation.ate_odometry, 0.3);
 }
 
+/// A two-session scan list from the BALM walk for executor tests: session `a` (the first `with_odometry`
+/// scans once the walk moves, with their true poses as odometry) and session `b` (the next
+/// `without_odometry` scans, no odometry: registered scan to scan), every cloud thinned to every
+/// other point to keep the test short.
+ScanList two_session_walk(const fs::path& folder, std::size_t with_odometry, std::size_t without_odometry) {
+  const std::string root = testing::shared_data_path("balm_sequence");
+  std::ifstream poses(root + "/poses.txt");
+  std::ostringstream list;
+  list << "session\tscan\todometry\n";
+  std::string line;
+  for (std::size_t index = 0; std::getline(poses, line) && index < 6 + with_odometry + without_odometry; ++index) {
+    if (index < 6) continue;  // the walk stands still at first
+    std::istringstream fields(line);
+    std::string name, pose;
+    fields >> name;
+    std::getline(fields, pose);
+    PointCloud cloud = read_point_cloud(root + "/" + name);
+    PointCloud thinned;
+    thinned.positions.resize(3, static_cast<Eigen::Index>((cloud.size() + 1) / 2));
+    for (Eigen::Index k = 0; k < thinned.positions.cols(); ++k) thinned.positions.col(k) = cloud.positions.col(2 * k);
+    write_point_cloud((folder / (name + ".ply")).string(), thinned);
+    const bool odometry = index < 6 + with_odometry;
+    list << (odometry ? "a" : "b") << "\t" << name << ".ply\t" << (odometry ? pose.substr(1) : "-") << "\n";
+  }
+  write(folder / "scans.tsv", list.str());
+  return read_scan_list((folder / "scans.tsv").string());
+}
+
+TEST(MappingExecutor, AnotherExecutorSeesTheBatchesAndGivesTheSameMap) {
+  QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
+  TemporaryFolder folder;
+  const ScanList list = two_session_walk(folder.path, 5, 3);
+  MapOptions options;
+  options.minimum_loop_travel = 3.0;  // loop candidates within the short session `a`
+  options.candidates_per_scan = 1;
+  options.place_candidates_per_scan = 1;
+  const MapResult in_process = map_scans(list, options);
+
+  // An executor that does what a remote worker does, passing models and edges through their bytes.
+  std::vector<std::vector<std::size_t>> model_batches;
+  std::vector<std::vector<MapPairRequest>> pair_batches;
+  std::vector<std::string> stored(list.scans.size());
+  MapExecutor executor;
+  executor.model = [&](const std::vector<std::size_t>& scans) {
+    model_batches.push_back(scans);
+    std::vector<MappedScan> models;
+    for (std::size_t scan : scans) {
+      stored[scan] = mapped_scan_to_bytes(model_map_scan(list, scan, options));
+      models.push_back(mapped_scan_from_bytes(stored[scan]));
+    }
+    return models;
+  };
+  executor.register_pairs = [&](const std::vector<MapPairRequest>& pairs) {
+    pair_batches.push_back(pairs);
+    std::vector<MapEdge> edges;
+    for (const MapPairRequest& pair : pairs)
+      edges.push_back(map_edge_from_bytes(map_edge_to_bytes(register_map_pair(
+          list, pair, mapped_scan_from_bytes(stored[pair.from]), mapped_scan_from_bytes(stored[pair.to]), options))));
+    return edges;
+  };
+  const MapResult elsewhere = map_scans(list, options, {}, executor);
+
+  // Batches: every scan modelled at once; the chain of session b one pair at a time in time order,
+  // each from its local guess; within session a, one batch per scan; across, one batch of all.
+  ASSERT_EQ(model_batches.size(), 1u);
+  EXPECT_EQ(model_batches[0], std::vector<std::size_t>({0, 1, 2, 3, 4, 5, 6, 7}));
+  ASSERT_GE(pair_batches.size(), 4u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    ASSERT_EQ(pair_batches[k].size(), 1u);
+    EXPECT_EQ(pair_batches[k][0].from, 6 + k);
+    EXPECT_EQ(pair_batches[k][0].to, 5 + k);
+    EXPECT_TRUE(pair_batches[k][0].local_guess.has_value());
+    EXPECT_EQ(pair_batches[k][0].kind, MapEdgeKind::Odometry);
+  }
+  for (std::size_t k = 2; k + 1 < pair_batches.size(); ++k) {
+    ASSERT_EQ(pair_batches[k].size(), 1u);  // candidates_per_scan
+    EXPECT_LT(pair_batches[k][0].from, 5u);
+    EXPECT_LT(pair_batches[k][0].to, pair_batches[k][0].from);
+    EXPECT_FALSE(pair_batches[k][0].local_guess.has_value());
+  }
+  EXPECT_GT(pair_batches.size(), 3u) << "session a should have loop candidates";
+  ASSERT_EQ(pair_batches.back().size(), 3u);  // one place candidate for each scan of b
+  for (const MapPairRequest& pair : pair_batches.back()) {
+    EXPECT_GE(pair.from, 5u);
+    EXPECT_LT(pair.to, 5u);
+  }
+
+  // The same map.
+  ASSERT_EQ(elsewhere.edges.size(), in_process.edges.size());
+  for (std::size_t k = 0; k < in_process.edges.size(); ++k) {
+    const MapEdge &a = in_process.edges[k], &b = elsewhere.edges[k];
+    EXPECT_EQ(a.from, b.from);
+    EXPECT_EQ(a.to, b.to);
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_EQ(a.status, b.status) << k;
+    EXPECT_EQ(a.used, b.used) << k;
+    EXPECT_EQ(a.across_sessions, b.across_sessions);
+    EXPECT_TRUE(a.transform.matrix().isApprox(b.transform.matrix(), 1e-12)) << k;
+    EXPECT_EQ(a.information, b.information) << k;
+  }
+  ASSERT_EQ(elsewhere.poses.size(), in_process.poses.size());
+  for (std::size_t k = 0; k < in_process.poses.size(); ++k)
+    EXPECT_LE((in_process.poses[k].matrix() - elsewhere.poses[k].matrix()).cwiseAbs().maxCoeff(), 1e-9) << k;
+  EXPECT_EQ(elsewhere.presets, in_process.presets);
+  EXPECT_EQ(elsewhere.place_ranking, in_process.place_ranking);
+}
+
+TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
+  MappedScan scan;
+  scan.model.records.resize(2);
+  for (std::size_t k = 0; k < 2; ++k) {
+    scan.model.records[k].label = static_cast<std::uint32_t>(1 + k);
+    for (int c = 0; c < 10; ++c) scan.model.records[k].q(c) = 0.1 * c + static_cast<double>(k);
+  }
+  scan.model.types = {QuadricType::Plane, QuadricType::Plane};
+  scan.model.element_point_counts = {10, 20};
+  scan.model.augmented_begin = 2;
+  scan.model.source_point_count = 30;
+  scan.descriptor = Eigen::VectorXd::LinSpaced(40, 0.0, 1.0 / 3.0);
+  scan.preset = "vlp16";
+  scan.modelling_ms = 12.5;
+  const std::string bytes = mapped_scan_to_bytes(scan);
+  const MappedScan back = mapped_scan_from_bytes(bytes);
+  EXPECT_EQ(back.descriptor, scan.descriptor);
+  EXPECT_EQ(back.preset, "vlp16");
+  EXPECT_FALSE(back.augmented.has_value());
+  EXPECT_EQ(mapped_scan_to_bytes(back), bytes);
+  EXPECT_NE(error_of([&] { mapped_scan_from_bytes(bytes.substr(0, bytes.size() - 3), "worker 3"); }).find("worker 3"),
+            std::string::npos);
+
+  MapEdge edge;
+  edge.from = 7;
+  edge.to = 2;
+  edge.kind = MapEdgeKind::Loop;
+  edge.status = "ambiguous";
+  edge.transform = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()) * Eigen::Translation3d(1.0 / 3.0, 2, -5);
+  edge.information(1, 4) = 0.25;
+  edge.note = "why";
+  const MapEdge edge_back = map_edge_from_bytes(map_edge_to_bytes(edge));
+  EXPECT_EQ(edge_back.from, 7u);
+  EXPECT_EQ(edge_back.kind, MapEdgeKind::Loop);
+  EXPECT_EQ(edge_back.status, "ambiguous");
+  EXPECT_EQ(edge_back.transform.matrix(), edge.transform.matrix());
+  EXPECT_EQ(edge_back.information, edge.information);
+  EXPECT_EQ(edge_back.note, "why");
+  EXPECT_NE(error_of([&] { map_edge_from_bytes(bytes); }).find("bad magic"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace quadrix
