@@ -99,18 +99,32 @@ void BM_CorrelateOverGroundKitti52To88(benchmark::State& state) {
 }
 BENCHMARK(BM_CorrelateOverGroundKitti52To88)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// KITTI-00 0 -> 4438 (5.3 m apart, `auto` on both scans) and its `ok` answer; nothing once `state` is
+// skipped because the shared data is absent or the pair did not register `ok`.
+struct RegisteredKittiPair {
+  quadrix::PointCloud source, target;
+  quadrix::RegistrationOptions options;
+  quadrix::RegistrationResult registered;
+};
+std::optional<RegisteredKittiPair> registered_kitti_0_to_4438(benchmark::State& state) {
+  RegisteredKittiPair pair;
+  if (!read_shared_pair(state, "kitti00/velodyne/000000.bin", "kitti00/velodyne/004438.ply", pair.source, pair.target)) return std::nullopt;
+  pair.options = quadrix::resolve_registration_options("auto", pair.source, "auto", pair.target);
+  pair.registered = quadrix::register_clouds(pair.source, pair.target, pair.options);
+  if (pair.registered.status != quadrix::RegistrationStatus::Ok) {
+    state.SkipWithError(("the pair did not register ok: " + pair.registered.message).c_str());
+    return std::nullopt;
+  }
+  return pair;
+}
+
 // verify_registration on the `ok` answer register_clouds gives KITTI-00 0 -> 4438 (5.3 m apart,
 // `auto` on both scans): what every `ok` answer pays for its checks. Reports the half-turn check's
 // share, and that of preparing both clouds for it, as counters.
 void BM_VerifyOkAnswerKitti0To4438(benchmark::State& state) {
-  quadrix::PointCloud source, target;
-  if (!read_shared_pair(state, "kitti00/velodyne/000000.bin", "kitti00/velodyne/004438.ply", source, target)) return;
-  const quadrix::RegistrationOptions options = quadrix::resolve_registration_options("auto", source, "auto", target);
-  const quadrix::RegistrationResult registered = quadrix::register_clouds(source, target, options);
-  if (registered.status != quadrix::RegistrationStatus::Ok) {
-    state.SkipWithError(("the pair did not register ok: " + registered.message).c_str());
-    return;
-  }
+  const std::optional<RegisteredKittiPair> pair = registered_kitti_0_to_4438(state);
+  if (!pair) return;
+  const auto& [source, target, options, registered] = *pair;
   double half_turn_ms = 0.0, preparation_ms = 0.0;
   for (auto _ : state) {
     quadrix::RegistrationResult result = registered;
@@ -129,14 +143,9 @@ BENCHMARK(BM_VerifyOkAnswerKitti0To4438)->Unit(benchmark::kMillisecond)->UseReal
 // fitness, inlier RMSE, correspondences and information every `ok` answer carries, on the whole
 // clouds (about 120k points each); state.range(0) threads (0: TBB's default).
 void BM_MeasureAnswerQualityKitti0To4438(benchmark::State& state) {
-  quadrix::PointCloud source, target;
-  if (!read_shared_pair(state, "kitti00/velodyne/000000.bin", "kitti00/velodyne/004438.ply", source, target)) return;
-  const quadrix::RegistrationOptions options = quadrix::resolve_registration_options("auto", source, "auto", target);
-  const quadrix::RegistrationResult registered = quadrix::register_clouds(source, target, options);
-  if (registered.status != quadrix::RegistrationStatus::Ok) {
-    state.SkipWithError(("the pair did not register ok: " + registered.message).c_str());
-    return;
-  }
+  const std::optional<RegisteredKittiPair> pair = registered_kitti_0_to_4438(state);
+  if (!pair) return;
+  const auto& [source, target, options, registered] = *pair;
   std::optional<tbb::global_control> threads;
   if (state.range(0) > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(state.range(0)));
   for (auto _ : state)
