@@ -5,6 +5,7 @@
 #include "fitting/extraction_internal.h"
 
 #include "geometry/error.h"
+#include "geometry/voxel_cells.h"
 
 #include <pcl/features/fpfh_omp.h>
 #include <pcl/features/normal_3d_omp.h>
@@ -55,15 +56,16 @@ struct FittedElement {
 template <typename Points>
 pcl::PointCloud<pcl::PointXYZ>::Ptr voxel_means(const Points& points, double voxel) {
   pcl::PointCloud<pcl::PointXYZ>::Ptr surface(new pcl::PointCloud<pcl::PointXYZ>);
-  std::unordered_map<std::uint64_t, std::size_t> slot;
+  CellMap<std::uint32_t> slot;  // cell -> index into cells, in the order cells are first met
   std::vector<detail::Moments> cells;
   const double inverse = 1.0 / voxel;
   for (Eigen::Index i = 0; i < points.cols(); ++i) {
     const Eigen::Vector3d point = points.col(i).template cast<double>();
     const Eigen::Vector3i c((point * inverse).array().floor().cast<int>());
-    auto [it, inserted] = slot.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()), cells.size());
+    const auto [index, inserted] =
+        slot.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()), static_cast<std::uint32_t>(cells.size()));
     if (inserted) cells.emplace_back();
-    cells[it->second].add(point);
+    cells[index].add(point);
   }
   surface->reserve(cells.size());
   for (const auto& cell : cells) {
