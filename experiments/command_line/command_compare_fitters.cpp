@@ -84,7 +84,8 @@ const CommandRegistration registration(45, [](CLI::App& app) {
     else if (const char* environment = std::getenv("QUADRIX_DATA_DIR")) study.data_root = environment;
 
     // The output folder is checked before the study and replaced at once after it.
-    FolderReplacement output("--out", options->out, {"fitters.csv", "fitters.md", "fitters.svg"}, {study.data_root});
+    FolderReplacement output("--out", options->out, {"fitters.csv", "fitters.md", "fitters.svg"}, {study.data_root},
+                             FolderSharing::OwnFilesOnly);  // papers/studies holds other studies too
     const bool terminal = isatty(fileno(stderr)) != 0;
     const auto start = std::chrono::steady_clock::now();
     const StudyProgress progress = [&](std::size_t done, std::size_t total) {

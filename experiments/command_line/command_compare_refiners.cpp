@@ -79,7 +79,8 @@ const CommandRegistration registration(46, [](CLI::App& app) {
     if (!options->data.empty()) study.data_root = options->data;
     else if (const char* environment = std::getenv("QUADRIX_DATA_DIR")) study.data_root = environment;
     // The output folder is checked before the study and replaced at once after it.
-    FolderReplacement output("--out", options->out, {"refiners.csv", "refiners.md", "refiners.svg"}, {study.data_root});
+    FolderReplacement output("--out", options->out, {"refiners.csv", "refiners.md", "refiners.svg"}, {study.data_root},
+                             FolderSharing::OwnFilesOnly);  // papers/studies holds other studies too
 
     const bool terminal = isatty(fileno(stderr)) != 0;
     const auto start = std::chrono::steady_clock::now();

@@ -141,8 +141,8 @@ void remove_abandoned_staging(const fs::path& target) {
 }  // namespace
 
 FolderReplacement::FolderReplacement(std::string option, std::string folder, std::vector<std::string> own_names,
-                                     const std::vector<std::string>& inputs)
-    : option_(std::move(option)), folder_(std::move(folder)), own_names_(std::move(own_names)) {
+                                     const std::vector<std::string>& inputs, FolderSharing sharing)
+    : option_(std::move(option)), folder_(std::move(folder)), own_names_(std::move(own_names)), sharing_(sharing) {
   if (folder_.empty()) throw Error(option_ + ": expected a folder name");
   const Identity identity = identity_of(folder_);
   if (in_system_folder(identity.canonical))
@@ -158,6 +158,10 @@ FolderReplacement::FolderReplacement(std::string option, std::string folder, std
     if (code) throw Error(option_ + " " + folder_ + ": cannot list the folder: " + code.message());
     for (const fs::directory_entry& entry : entries) {
       const std::string name = entry.path().filename().string();
+      if (sharing_ == FolderSharing::OwnFilesOnly) {
+        if (matches_any(name, own_names_)) require_replaceable(option_, entry.path().string());
+        continue;
+      }
       if (!matches_any(name, own_names_))
         throw Error(option_ + " " + folder_ + ": holds '" + name +
                     "', which this command does not write; the folder is replaced whole, so give a new or empty "
@@ -167,6 +171,12 @@ FolderReplacement::FolderReplacement(std::string option, std::string folder, std
   for (const std::string& input : inputs) {
     if (input.empty()) continue;
     const std::string canonical = identity_of(input).canonical;
+    if (sharing_ == FolderSharing::OwnFilesOnly) {
+      if (fs::path(canonical).parent_path() == fs::path(identity.canonical) &&
+          matches_any(fs::path(canonical).filename().string(), own_names_))
+        throw Error(option_ + " " + folder_ + ": the input " + input + " is one of the files this command writes there; refused");
+      continue;
+    }
     if (canonical == identity.canonical || canonical.rfind(identity.canonical + "/", 0) == 0)
       throw Error(option_ + " " + folder_ + ": holds the input " + input + "; refused (the folder is replaced whole)");
   }
@@ -216,7 +226,17 @@ void FolderReplacement::commit() {
   std::error_code code;
   int renamed = -1;
   int error = 0;
-  if (fs::exists(fs::symlink_status(target_, code))) {
+  if (sharing_ == FolderSharing::OwnFilesOnly && fs::is_directory(target_, code)) {
+    // Each staged file over its namesake (a rename within one file system), the others untouched.
+    renamed = 0;
+    for (const fs::directory_entry& entry : fs::directory_iterator(staging_, code)) {
+      const fs::path destination = fs::path(target_) / entry.path().filename();
+      if (::rename(entry.path().c_str(), destination.c_str()) != 0 && renamed == 0) {
+        renamed = -1;
+        error = errno;
+      }
+    }
+  } else if (fs::exists(fs::symlink_status(target_, code))) {
     renamed = ::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, target_.c_str(), RENAME_EXCHANGE);
     if (renamed != 0) {  // a file system without RENAME_EXCHANGE: the old folder aside, then the new one in
       const std::string aside = (fs::path(root_) / ".old").string();

@@ -25,6 +25,12 @@ struct PlannedOutput {
 /// (same file by device and inode, or the same canonical path).
 void check_outputs(const std::vector<PlannedOutput>& outputs, const std::vector<std::string>& inputs);
 
+/// Whether a command owns its output folder or shares it with other files.
+enum class FolderSharing {
+  Whole,          ///< the folder is the command's: replaced whole, other entries refused before the work
+  OwnFilesOnly,   ///< the folder holds other files too (papers/studies): only the command's files are replaced, together
+};
+
 /// The folder a command fills (`--out DIR`), replaced all at once: checked before the work, built
 /// beside it in a hidden staging folder (".NAME.staging-PID/NAME"), swapped in by commit() with one
 /// rename (renameat2 RENAME_EXCHANGE when the folder exists), and the old folder removed only after
@@ -37,8 +43,11 @@ class FolderReplacement {
   /// entries whose names match one of `own_names` (shell patterns such as "scan_*.ply": an earlier
   /// run's outputs; a matching folder counts whole), outside /proc, /sys and /dev, in a place where
   /// it can be created, and holding none of `inputs` (nor being one); else quadrix::Error.
+  /// With FolderSharing::OwnFilesOnly other entries may stay; the command's own (existing ones
+  /// must be regular files, none an input) are replaced at commit() by one rename each, with
+  /// SIGINT, SIGTERM and SIGHUP blocked, so a signal cannot leave some old and some new.
   FolderReplacement(std::string option, std::string folder, std::vector<std::string> own_names,
-                    const std::vector<std::string>& inputs);
+                    const std::vector<std::string>& inputs, FolderSharing sharing = FolderSharing::Whole);
   /// Removes the staging folder unless committed.
   ~FolderReplacement();
   FolderReplacement(const FolderReplacement&) = delete;
@@ -59,6 +68,7 @@ class FolderReplacement {
   std::string root_;     // ".NAME.staging-PID" beside the target, removed whole on a signal
   std::string staging_;  // root_/NAME: becomes the folder
   std::vector<std::string> own_names_;
+  FolderSharing sharing_ = FolderSharing::Whole;
   std::unique_ptr<RemovedOnSignal> tracked_;
   bool committed_ = false;
 };

@@ -513,6 +513,15 @@ TEST(RedTeamOutputs, EveryCommandsOutputFolderChangesWholeOrNotAtAll) {
   std::printf("interrupted %d of %zu commands\n", interrupted_runs, commands.size());
   EXPECT_GE(interrupted_runs, 4) << "too few runs were interrupted to test anything";
 
+  // compare-fitters and compare-refiners share their folder (papers/studies holds both studies):
+  // another file there stays, and their own files are replaced together.
+  write_text(parent / "compare_fitters" / "notes.txt", "mine");
+  const CommandRun shared = run_quadrix(with_out(commands[3].first, parent / "compare_fitters"));
+  EXPECT_EQ(shared.exit_code, 0) << describe(shared);
+  EXPECT_EQ(read_text(parent / "compare_fitters" / "notes.txt"), "mine");
+  EXPECT_TRUE(fs::exists(parent / "compare_fitters" / "fitters.md"));
+  EXPECT_EQ(leftovers(parent), std::vector<std::string>{});
+
   // Checked before the work: a folder holding a file the command does not write, a file, an input.
   write_text(parent / "synth" / "notes.txt", "mine");
   EXPECT_REFUSED(run_quadrix(with_out(commands[0].first, parent / "synth")), "notes.txt");
