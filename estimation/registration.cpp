@@ -25,6 +25,44 @@ using stage_timing::timed;
 
 std::size_t count_quadrics(const SceneModel& model) { return model.augmented_begin; }
 
+// Points a side keeps when either cloud lies on one plane (register_clouds): enough for the pipeline
+// to model and check the pair, and no more, since no number of points on one plane fixes the three
+// motions it leaves free.
+constexpr std::size_t kOnePlaneRegistrationPoints = 50000;
+
+// Every ceil(N / cap)-th point of `cloud` with every per-point field (all of them when N <= cap).
+PointCloud strided_points(const PointCloud& cloud, std::size_t cap) {
+  const std::size_t count = cloud.size();
+  if (count <= cap) return cloud;
+  const std::size_t stride = (count + cap - 1) / cap;
+  std::vector<Eigen::Index> kept;
+  for (std::size_t i = 0; i < count; i += stride) kept.push_back(static_cast<Eigen::Index>(i));
+  PointCloud sample;
+  sample.local_origin = cloud.local_origin;
+  sample.positions = cloud.positions(Eigen::all, kept);
+  const auto take = [&](const auto& values) {
+    std::decay_t<decltype(values)> picked;
+    if (values.size() != count) return picked;
+    picked.reserve(kept.size());
+    for (const Eigen::Index i : kept) picked.push_back(values[static_cast<std::size_t>(i)]);
+    return picked;
+  };
+  sample.intensity = take(cloud.intensity);
+  sample.labels = take(cloud.labels);
+  sample.colors = take(cloud.colors);
+  for (const auto& [name, values] : cloud.extra_fields) sample.extra_fields[name] = take(values);
+  return sample;
+}
+
+// The labels of the points strided_points kept.
+std::vector<std::uint32_t> strided_labels(const std::vector<std::uint32_t>& labels, std::size_t count, std::size_t cap) {
+  if (labels.empty() || count <= cap) return labels;
+  const std::size_t stride = (count + cap - 1) / cap;
+  std::vector<std::uint32_t> kept;
+  for (std::size_t i = 0; i < count && i < labels.size(); i += stride) kept.push_back(labels[i]);
+  return kept;
+}
+
 }  // namespace
 
 RegistrationResult register_models(const SceneModel& source, const SceneModel& target, const RegistrationOptions& options) {
@@ -169,6 +207,34 @@ RegistrationResult register_modelled_clouds(const ModelledCloud& source, const M
 RegistrationResult register_clouds(const PointCloud& source, const PointCloud& target, const RegistrationOptions& options,
                                    const std::vector<std::uint32_t>& source_labels,
                                    const std::vector<std::uint32_t>& target_labels) {
+  // A cloud on one plane leaves three motions free, so the pair is degenerate whatever the pipeline
+  // finds, and every point past a few more costs time without telling more: modelling a 3 M-point
+  // plane took ~50 s a side (normals of the static-scan preset; docs/reliability.md). The pair is then
+  // registered from evenly strided points of both clouds, for the same status and checks.
+  const auto one_plane = [&](const PointCloud& cloud) {
+    return cloud.size() > kOnePlaneRegistrationPoints && lies_on_one_plane(cloud, options.modelling);
+  };
+  bool source_flat = false, target_flat = false;
+  tbb::parallel_invoke([&] { source_flat = one_plane(source); }, [&] { target_flat = one_plane(target); });
+  if (source_flat || target_flat) {
+    const std::size_t cap = kOnePlaneRegistrationPoints;
+    RegistrationResult result =
+        register_clouds(strided_points(source, cap), strided_points(target, cap), options,
+                        strided_labels(source_labels, source.size(), cap), strided_labels(target_labels, target.size(), cap));
+    const std::string flat = std::string("the ") +
+                             (source_flat && target_flat ? "source and target clouds lie"
+                              : source_flat              ? "source cloud lies"
+                                                         : "target cloud lies") +
+                             " on one plane, which leaves three motions free";
+    // Whatever the strided pair gave, no answer is determined: never `ok` or `ambiguous` here.
+    if (result.status == RegistrationStatus::Ok || result.status == RegistrationStatus::Ambiguous)
+      fail_estimation(result, RegistrationStatus::Degenerate, flat + " (the pipeline's answer: " + result.message + ")");
+    result.message += " [" + flat + "; registered from at most " + std::to_string(cap) + " evenly strided points a side, of " +
+                      std::to_string(source.size()) + " and " + std::to_string(target.size()) + "]";
+    result.counts.source_points = source.size();
+    result.counts.target_points = target.size();
+    return result;
+  }
   ExtractionOptions source_extraction = options.source_extraction;
   ExtractionOptions target_extraction = options.target_extraction;
   if (!source_labels.empty()) source_extraction.semantic_mode = SemanticMode::Labels;

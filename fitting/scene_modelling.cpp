@@ -5,6 +5,7 @@
 #include "fitting/extraction_internal.h"
 
 #include "geometry/error.h"
+#include "geometry/voxel_cells.h"
 
 #include <pcl/features/fpfh_omp.h>
 #include <pcl/features/normal_3d_omp.h>
@@ -50,28 +51,50 @@ struct FittedElement {
   std::string message;
 };
 
-// FPFH (Rusu et al. 2009) of the augmented points, computed on the cloud down-sampled at
-// descriptor_surface_voxel (support surface) with normals from a radius neighbourhood.
-std::vector<std::array<float, kFpfhSize>> fpfh_descriptors(const Eigen::Matrix3Xd& points,
+// The cloud down-sampled at `voxel`: one point at the mean of each voxel's points (the FPFH
+// support surface, and what the one-plane test below looks at).
+template <typename Points>
+pcl::PointCloud<pcl::PointXYZ>::Ptr voxel_means(const Points& points, double voxel) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr surface(new pcl::PointCloud<pcl::PointXYZ>);
+  CellMap<std::uint32_t> slot;  // cell -> index into cells, in the order cells are first met
+  std::vector<detail::Moments> cells;
+  const double inverse = 1.0 / voxel;
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    const Eigen::Vector3d point = points.col(i).template cast<double>();
+    const Eigen::Vector3i c((point * inverse).array().floor().cast<int>());
+    const auto [index, inserted] =
+        slot.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()), static_cast<std::uint32_t>(cells.size()));
+    if (inserted) cells.emplace_back();
+    cells[index].add(point);
+  }
+  surface->reserve(cells.size());
+  for (const auto& cell : cells) {
+    const Eigen::Vector3d m = cell.mean();
+    surface->push_back(pcl::PointXYZ(static_cast<float>(m.x()), static_cast<float>(m.y()), static_cast<float>(m.z())));
+  }
+  return surface;
+}
+
+// Whether every point of `surface` lies within `tolerance` of one plane (the least-squares plane of
+// the points, the normal its covariance's smallest eigenvector). Fewer than 3 points count as one plane.
+bool surface_on_one_plane(const pcl::PointCloud<pcl::PointXYZ>& surface, double tolerance) {
+  if (surface.size() < 3) return true;
+  detail::Moments moments;
+  for (const pcl::PointXYZ& p : surface) moments.add(Eigen::Vector3d(p.x, p.y, p.z));
+  const Eigen::Vector3d centre = moments.mean();
+  const Eigen::Matrix3d covariance = moments.outer / moments.count - centre * centre.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  const Eigen::Vector3d normal = solver.eigenvectors().col(0);
+  for (const pcl::PointXYZ& p : surface)
+    if (std::abs(normal.dot(Eigen::Vector3d(p.x, p.y, p.z) - centre)) > tolerance) return false;
+  return true;
+}
+
+// FPFH (Rusu et al. 2009) of the augmented points on the support `surface` (voxel_means at
+// descriptor_surface_voxel) with normals from a radius neighbourhood.
+std::vector<std::array<float, kFpfhSize>> fpfh_descriptors(const pcl::PointCloud<pcl::PointXYZ>::Ptr& surface,
                                                            const Eigen::Matrix3Xd& keypoints,
                                                            const ModellingOptions& options) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr surface(new pcl::PointCloud<pcl::PointXYZ>);
-  {
-    std::unordered_map<std::uint64_t, std::size_t> slot;
-    std::vector<detail::Moments> cells;
-    const double inverse = 1.0 / options.descriptor_surface_voxel;
-    for (Eigen::Index i = 0; i < points.cols(); ++i) {
-      const Eigen::Vector3i c((points.col(i) * inverse).array().floor().cast<int>());
-      auto [it, inserted] = slot.try_emplace(detail::voxel_key(c.x(), c.y(), c.z()), cells.size());
-      if (inserted) cells.emplace_back();
-      cells[it->second].add(points.col(i));
-    }
-    surface->reserve(cells.size());
-    for (const auto& cell : cells) {
-      const Eigen::Vector3d m = cell.mean();
-      surface->push_back(pcl::PointXYZ(static_cast<float>(m.x()), static_cast<float>(m.y()), static_cast<float>(m.z())));
-    }
-  }
   pcl::PointCloud<pcl::PointXYZ>::Ptr queries(new pcl::PointCloud<pcl::PointXYZ>);
   for (Eigen::Index i = 0; i < keypoints.cols(); ++i)
     queries->push_back(pcl::PointXYZ(static_cast<float>(keypoints(0, i)), static_cast<float>(keypoints(1, i)),
@@ -100,6 +123,9 @@ std::vector<std::array<float, kFpfhSize>> fpfh_descriptors(const Eigen::Matrix3X
   return descriptors;
 }
 
+// The tolerance of the one-plane test (lies_on_one_plane in scene_modelling.h says why 0.2 v).
+double one_plane_tolerance(const ModellingOptions& options) { return 0.2 * options.descriptor_surface_voxel; }
+
 // Every ceil(N / cap)-th column of `points` (at most `cap` of them, evenly spread along the element's
 // point order, deterministic), or all of them when cap is 0 or N <= cap. A 70k-point ground or a
 // 10k-point facade has the same plane from 4,000 evenly spread points; the fit's cost does not.
@@ -118,6 +144,15 @@ void augment_scene_model(const Eigen::Matrix3Xd& points, ModellingResult& modell
   if (!(options.augmentation_voxel > 0.0)) throw Error("modelling option v_a (augmentation_voxel) must be positive");
   SceneModel& model = modelling.model;
   if (model.augmented_count() > 0) return;
+  // A cloud on one plane: augmented points there are alike (FPFH sees only the plane's own angles)
+  // and, like the plane, leave the three in-plane motions free, so they add no constraint and are not
+  // made. On a flat 300 k-point scene the descriptors were ~95% of modelling's time (docs/reliability.md).
+  const pcl::PointCloud<pcl::PointXYZ>::Ptr surface = voxel_means(points, options.descriptor_surface_voxel);
+  if (surface_on_one_plane(*surface, one_plane_tolerance(options))) {
+    modelling.message += std::string(modelling.message.empty() ? "" : "; ") +
+                         "the cloud lies on one plane: no augmented points (they would add no constraint)";
+    return;
+  }
   const std::vector<Element>& elements = modelling.extraction.elements;
   // The kept records are grouped by class, largest V_a first (top-K_e above), so the first K_a
   // quadric records of each class are its K_a largest elements (K_a <= K_e).
@@ -169,7 +204,22 @@ void augment_scene_model(const Eigen::Matrix3Xd& points, ModellingResult& modell
     modelling.record_elements.push_back(candidate.element);
     keypoints.col(static_cast<Eigen::Index>(k)) = candidate.statistics.center;
   }
-  if (options.compute_descriptors && kept > 0) model.augmented_descriptors = fpfh_descriptors(points, keypoints, options);
+  if (options.compute_descriptors && kept > 0) model.augmented_descriptors = fpfh_descriptors(surface, keypoints, options);
+}
+
+bool lies_on_one_plane(const PointCloud& cloud, const ModellingOptions& options) {
+  const double voxel = options.descriptor_surface_voxel;
+  if (!(voxel > 0.0)) throw Error("modelling option descriptor_surface_voxel must be positive");
+  // Evenly strided points first: a cloud that is not one plane (every real scan) is told from at most
+  // 500,000 of its points; only a cloud whose sample lies on one plane is then tested whole.
+  constexpr Eigen::Index kSample = 500000;
+  const Eigen::Index count = cloud.positions.cols();
+  if (count > kSample) {
+    const Eigen::Index stride = (count + kSample - 1) / kSample;
+    const Eigen::Matrix3Xf sample = cloud.positions(Eigen::all, Eigen::seq(0, count - 1, stride));
+    if (!surface_on_one_plane(*voxel_means(sample, voxel), one_plane_tolerance(options))) return false;
+  }
+  return surface_on_one_plane(*voxel_means(cloud.positions, voxel), one_plane_tolerance(options));
 }
 
 ModellingResult model_elements(const Eigen::Matrix3Xd& points, const ExtractionResult& extraction,

@@ -68,6 +68,13 @@ ModellingResult model_elements(const Eigen::Matrix3Xd& points, const ExtractionR
 /// on the other side of a pair when only one side was augmented (augmented matches need both).
 void augment_scene_model(const Eigen::Matrix3Xd& points, ModellingResult& modelling, const ModellingOptions& options);
 
+/// Whether `cloud` lies on one plane, as augment_scene_model decides it: the means of its voxels of
+/// edge v = options.descriptor_surface_voxel all within 0.2 v of their least-squares plane (fewer
+/// than 3 voxels count as one plane). Within that the normals over FPFH's normal radius (2 v) tilt
+/// by under atan(0.2 v / 2 v) ~ 6 degrees, inside one of FPFH's 11 angle bins. Such a cloud leaves
+/// three motions free (two shifts in the plane, the turn about its normal): it cannot be registered.
+bool lies_on_one_plane(const PointCloud& cloud, const ModellingOptions& options);
+
 /// Extraction (extract_elements) followed by model_elements: the whole paper §"Quadric-based Scene
 /// Representation". Timings of every stage and "total" are in model.timings_ms.
 ModellingResult model_scene(const PointCloud& cloud, const ExtractionOptions& extraction_options,

@@ -18,6 +18,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 namespace quadrix {
@@ -554,8 +555,46 @@ std::atomic<int> removal_state[kRemovalSlots];
 std::atomic<long> removal_order[kRemovalSlots];
 std::atomic<long> removal_counter{0};
 
-// Removes every live path, newest first (files before the folder holding them), with only
-// async-signal-safe calls, then ends the process by the same signal with its default action.
+// Removes the folder open as `folder` (a descriptor) and everything below it, down to 16 levels,
+// with only async-signal-safe calls (getdents64, unlinkat, openat), for the handler below: a staging
+// folder a writer filled with files and folders of its own.
+void remove_folder_contents(int folder, int depth) {
+  alignas(8) char buffer[2048];
+  for (;;) {
+    const long bytes = ::syscall(SYS_getdents64, folder, buffer, sizeof buffer);
+    if (bytes <= 0) return;
+    bool removed_any = false;
+    for (long offset = 0; offset < bytes;) {
+      struct Entry {
+        std::uint64_t inode;
+        std::int64_t next;
+        unsigned short length;
+        unsigned char type;
+        char name[1];
+      };
+      const Entry* entry = reinterpret_cast<const Entry*>(buffer + offset);
+      offset += entry->length;
+      const char* name = entry->name;
+      if (name[0] == '.' && (name[1] == '\0' || (name[1] == '.' && name[2] == '\0'))) continue;
+      if (::unlinkat(folder, name, 0) == 0) {
+        removed_any = true;
+        continue;
+      }
+      if (depth >= 16) continue;
+      const int inner = ::openat(folder, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+      if (inner < 0) continue;
+      remove_folder_contents(inner, depth + 1);
+      ::close(inner);
+      removed_any = ::unlinkat(folder, name, AT_REMOVEDIR) == 0 || removed_any;
+    }
+    if (!removed_any) return;  // what is left cannot be removed: stop rather than loop
+    ::lseek(folder, 0, SEEK_SET);
+  }
+}
+
+// Removes every live path, newest first (files before the folder holding them; a folder with
+// everything in it), with only async-signal-safe calls, then ends the process by the same signal
+// with its default action.
 extern "C" void remove_tracked_paths_and_exit(int signal_number) {
   bool removed[kRemovalSlots] = {};
   for (int round = 0; round < kRemovalSlots; ++round) {
@@ -568,7 +607,14 @@ extern "C" void remove_tracked_paths_and_exit(int signal_number) {
       }
     if (newest < 0) break;
     removed[newest] = true;
-    if (::unlink(removal_paths[newest]) != 0) ::rmdir(removal_paths[newest]);
+    if (::unlink(removal_paths[newest]) != 0 && ::rmdir(removal_paths[newest]) != 0) {
+      const int folder = ::open(removal_paths[newest], O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+      if (folder >= 0) {
+        remove_folder_contents(folder, 0);
+        ::close(folder);
+        ::rmdir(removal_paths[newest]);
+      }
+    }
   }
   ::signal(signal_number, SIG_DFL);
   ::raise(signal_number);

@@ -7,10 +7,11 @@
 namespace quadrix {
 
 /// Installs handlers of SIGINT, SIGTERM and SIGHUP that remove every path a live RemovedOnSignal
-/// holds (files, then emptied folders, newest first) and then end the process by that signal.
+/// holds (newest first: a file, or a folder with everything in it) and then end the process by that
+/// signal.
 void remove_on_signals();
 
-/// While it lives, `path` (a temporary file or a staging folder's entry) is removed if the process
+/// While it lives, `path` (a temporary file or a staging folder) is removed if the process
 /// is ended by a signal remove_on_signals handles. At most 256 live at once (beyond: not tracked).
 class RemovedOnSignal {
  public:

@@ -6,6 +6,7 @@
 // printed. `quadrix bench merge DIR... --out DIR` merges shard folders into the summary of one run.
 #include "experiments/benchmark/bench_pairs.h"
 #include "experiments/benchmark/benchmark_runner.h"
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "estimation/registration_config.h"
 #include "geometry/error.h"
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -126,9 +128,25 @@ std::string format_duration(double seconds) {
   return text;
 }
 
+// The files write_bench_outputs puts in a folder (the only ones an existing --out folder may hold).
+std::vector<std::string> bench_output_names() {
+  return {"pairs.csv", "run.json", "summary.md", "success_by_difficulty.svg", "error_cdf.svg", "time_per_stage.svg"};
+}
+
 void run(BenchCommandOptions& options) {
   std::string description;
   const std::vector<BenchPair> pairs = collect_pairs(options, description);
+  // The output folder is checked before the benchmark and replaced at once after it.
+  std::optional<FolderReplacement> output;
+  if (!options.out.empty() && !options.print_pairs) {
+    std::vector<std::string> inputs = {options.pairs_file, options.kitti_root, options.calibration, options.bench.config};
+    inputs.insert(inputs.end(), options.lists.begin(), options.lists.end());
+    for (const BenchPair& pair : pairs) {
+      inputs.push_back(pair.source);
+      inputs.push_back(pair.target);
+    }
+    output.emplace("--out", options.out, bench_output_names(), inputs);
+  }
   if (options.print_pairs) {
     std::printf("id\tsource\ttarget\tdifficulty\tdistance_m\tgt\n");
     for (const BenchPair& pair : pairs) {
@@ -198,7 +216,8 @@ void run(BenchCommandOptions& options) {
   info.shard_count = bench.shard_count;
   info.options_text = options_text.str();
   const std::vector<MethodSummary> summaries =
-      options.out.empty() ? summarize_bench(rows, bench.methods) : write_bench_outputs(options.out, rows, info);
+      output ? write_bench_outputs(output->staging_folder(), rows, info) : summarize_bench(rows, bench.methods);
+  if (output) output->commit();
   std::printf("quadrix bench: %zu pairs x %d trial(s)%s, %zu tasks in this shard (%d/%d)\n", pairs.size(), bench.trials,
               bench.ablation.empty() ? "" : (", ablation " + bench.ablation).c_str(), rows.size() / bench.methods.size(),
               bench.shard_index, bench.shard_count);
@@ -281,7 +300,9 @@ const CommandRegistration registration(70, [](CLI::App& app) {
   merge->add_option("folders", *merge_folders, "Shard output folders (each from `quadrix bench --shard i/n --out DIR`)")->required();
   merge->add_option("--out", *merge_out, "Folder for the merged outputs")->required();
   merge->callback([merge_folders, merge_out] {
-    const std::vector<MethodSummary> summaries = merge_bench_outputs(*merge_folders, *merge_out);
+    FolderReplacement output("--out", *merge_out, bench_output_names(), *merge_folders);
+    const std::vector<MethodSummary> summaries = merge_bench_outputs(*merge_folders, output.staging_folder());
+    output.commit();
     std::printf("quadrix bench merge: %zu folders -> %s\n%s", merge_folders->size(), merge_out->c_str(),
                 bench_summary_text(summaries).c_str());
   });

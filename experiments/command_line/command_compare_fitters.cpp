@@ -1,6 +1,7 @@
 // `quadrix compare-fitters`: the fitter study (experiments/studies/fitter_study.h). Writes fitters.csv,
 // fitters.md and fitters.svg into --out. The committed report is produced from the repository root by
 //   build/bin/quadrix compare-fitters --out papers/studies
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/studies/fitter_study.h"
 #include "geometry/error.h"
@@ -82,6 +83,9 @@ const CommandRegistration registration(45, [](CLI::App& app) {
     if (!options->data.empty()) study.data_root = options->data;
     else if (const char* environment = std::getenv("QUADRIX_DATA_DIR")) study.data_root = environment;
 
+    // The output folder is checked before the study and replaced at once after it.
+    FolderReplacement output("--out", options->out, {"fitters.csv", "fitters.md", "fitters.svg"}, {study.data_root},
+                             FolderSharing::OwnFilesOnly);  // papers/studies holds other studies too
     const bool terminal = isatty(fileno(stderr)) != 0;
     const auto start = std::chrono::steady_clock::now();
     const StudyProgress progress = [&](std::size_t done, std::size_t total) {
@@ -94,8 +98,7 @@ const CommandRegistration registration(45, [](CLI::App& app) {
     };
     const FitterStudyResult result = run_fitter_study(study, progress);
 
-    std::filesystem::create_directories(options->out);
-    const std::filesystem::path folder(options->out);
+    const std::filesystem::path folder(output.staging_folder());
     // The command line as a user would retype it (only the options given).
     std::string command_line = "quadrix compare-fitters";
     for (const CLI::Option* option : command->get_options()) {
@@ -107,8 +110,9 @@ const CommandRegistration registration(45, [](CLI::App& app) {
     write_fitter_study_csv((folder / "fitters.csv").string(), result);
     write_fitter_study_markdown((folder / "fitters.md").string(), result, study, command_line);
     write_fitter_study_svg((folder / "fitters.svg").string(), result);
+    output.commit();
     std::cout << "compare-fitters: " << result.rows.size() << " fits in " << result.seconds << " s; wrote "
-              << (folder / "fitters.md").string() << ", fitters.csv, fitters.svg" << std::endl;
+              << (std::filesystem::path(options->out) / "fitters.md").string() << ", fitters.csv, fitters.svg" << std::endl;
   });
 });
 

@@ -2,6 +2,7 @@
 // refiners.md and refiners.svg into --out. The committed report is produced from the repository root by
 //   make study-refiners   (build/bin/quadrix compare-refiners --out papers/studies)
 #include "estimation/refiner.h"
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/studies/refiner_study.h"
 #include "geometry/error.h"
@@ -77,6 +78,9 @@ const CommandRegistration registration(46, [](CLI::App& app) {
     study.real_data = !options->no_real;
     if (!options->data.empty()) study.data_root = options->data;
     else if (const char* environment = std::getenv("QUADRIX_DATA_DIR")) study.data_root = environment;
+    // The output folder is checked before the study and replaced at once after it.
+    FolderReplacement output("--out", options->out, {"refiners.csv", "refiners.md", "refiners.svg"}, {study.data_root},
+                             FolderSharing::OwnFilesOnly);  // papers/studies holds other studies too
 
     const bool terminal = isatty(fileno(stderr)) != 0;
     const auto start = std::chrono::steady_clock::now();
@@ -87,9 +91,8 @@ const CommandRegistration registration(46, [](CLI::App& app) {
       if (done == total) std::fprintf(stderr, "\n");
     };
     const RefinerStudyResult result = run_refiner_study(study, progress);
+    const std::filesystem::path folder(output.staging_folder());
 
-    std::filesystem::create_directories(options->out);
-    const std::filesystem::path folder(options->out);
     // The command line as a user would retype it: every option given, in declaration order.
     std::string command_line = "quadrix compare-refiners";
     for (const CLI::Option* option : command->get_options()) {
@@ -102,8 +105,9 @@ const CommandRegistration registration(46, [](CLI::App& app) {
     write_refiner_study_csv((folder / "refiners.csv").string(), result);
     write_refiner_study_markdown((folder / "refiners.md").string(), result, study, command_line);
     write_refiner_study_svg((folder / "refiners.svg").string(), result);
+    output.commit();
     std::cout << "compare-refiners: " << result.rows.size() << " refinements in " << result.seconds << " s; wrote "
-              << (folder / "refiners.md").string() << ", refiners.csv, refiners.svg" << std::endl;
+              << (std::filesystem::path(options->out) / "refiners.md").string() << ", refiners.csv, refiners.svg" << std::endl;
   });
 });
 

@@ -1,6 +1,7 @@
 // `quadrix fitter-segments`: segments cut from simulated scans with their true primitives
 // (experiments/synthetic/scan_segments.h), written as .npy for the learned fitter's training script:
 //   quadrix fitter-segments --seed 101 --scans 600 --object-scans 3000 --out /tmp/segments
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/synthetic/scan_segments.h"
 
@@ -30,8 +31,11 @@ const CommandRegistration registration(22, [](CLI::App& app) {
   command->add_option("--max-points", options->max_points, "Thin larger segments to this many points")->capture_default_str();
   command->add_option("--out", *out, "Output folder")->capture_default_str();
   command->callback([options, out] {
+    // The output folder is checked before the simulation and replaced at once after it.
+    FolderReplacement output("--out", *out, {"points.npy", "segments.npy", "segments.json"}, {});
     const std::vector<ScanSegment> segments = make_scan_segments(*options);
-    write_scan_segments(*out, segments, *options);
+    write_scan_segments(output.staging_folder(), segments, *options);
+    output.commit();
     std::map<std::string, int> counts;
     for (const ScanSegment& segment : segments) ++counts[quadric_type_name(segment.type)];
     std::cout << "fitter-segments: " << segments.size() << " segments from " << options->scans << " scene scans and "

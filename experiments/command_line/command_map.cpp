@@ -5,6 +5,7 @@
 // descriptor across them, loop edges from the registration pipeline, a pose graph. Writes
 // poses.tsv, edges.csv, report.json, map.ply, map_model.qsm and models/ into DIR (all or nothing).
 // With --gt also the ATE, RPE and the loop edges' precision and recall. Exit 2 on bad input.
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "estimation/mapping.h"
 #include "experiments/reports/map_page.h"
@@ -98,6 +99,11 @@ void run(const MapCommandOptions& options) {
                                               : read_kitti_scan_list(options.kitti, options.kitti_poses, options.kitti_calibration);
   std::vector<PoseRow> truth;
   if (!options.truth.empty()) truth = read_pose_table(options.truth);
+  // The output folder is checked before the work and replaced at once after it, page included.
+  std::vector<std::string> inputs = {options.scans, options.kitti, options.kitti_poses, options.kitti_calibration, options.truth};
+  for (const ScanEntry& scan : list.scans) inputs.push_back(scan.path);
+  FolderReplacement output("--out", options.out,
+                           {"poses.tsv", "edges.csv", "report.json", "map.ply", "map_model.qsm", "models", "map.html"}, inputs);
 
   const bool terminal = isatty(fileno(stderr)) != 0;
   const auto start = std::chrono::steady_clock::now();
@@ -123,9 +129,10 @@ void run(const MapCommandOptions& options) {
     evaluation = evaluate_map(result, truth, 30.0, options.map.minimum_loop_travel);
     evaluation_json = map_evaluation_json(*evaluation);
   }
-  write_map(options.out, result, options.map, evaluation_json);
+  write_map(output.staging_folder(), result, options.map, evaluation_json);
   // The 3-D page of the folder just written (trajectories, loop edges by status, the map).
-  const std::string page = write_map_page(options.out);
+  const std::string page = write_map_page(output.staging_folder());
+  output.commit();
 
   std::size_t loops = 0, ok = 0, used = 0, within = 0;
   for (const MapEdge& edge : result.edges) {

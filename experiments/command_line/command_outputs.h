@@ -25,35 +25,51 @@ struct PlannedOutput {
 /// (same file by device and inode, or the same canonical path).
 void check_outputs(const std::vector<PlannedOutput>& outputs, const std::vector<std::string>& inputs);
 
-/// A folder whose files a command replaces all at once: they are written into a staging folder
-/// beside it (".NAME.staging-PID"), which commit() swaps in with one rename (the old folder is then
-/// removed). Interrupted (an exception, SIGINT, SIGTERM, SIGHUP) before commit(), the folder is
-/// untouched and the staging folder removed.
+/// Whether a command owns its output folder or shares it with other files.
+enum class FolderSharing {
+  Whole,          ///< the folder is the command's: replaced whole, other entries refused before the work
+  OwnFilesOnly,   ///< the folder holds other files too (papers/studies): only the command's files are replaced, together
+};
+
+/// The folder a command fills (`--out DIR`), replaced all at once: checked before the work, built
+/// beside it in a hidden staging folder (".NAME.staging-PID/NAME"), swapped in by commit() with one
+/// rename (renameat2 RENAME_EXCHANGE when the folder exists), and the old folder removed only after
+/// the swap. Interrupted before commit() (an exception, SIGINT, SIGTERM, SIGHUP), the folder is left
+/// as it was and the staging folder is removed with everything in it. Every command that writes a
+/// folder goes through it.
 class FolderReplacement {
  public:
   /// Checks, before the work, that `folder` (given by `option`) is nothing or a folder holding only
-  /// files named in `own_names` (an earlier run's outputs), in a writable place, and holding none
-  /// of `inputs`; else quadrix::Error.
+  /// entries whose names match one of `own_names` (shell patterns such as "scan_*.ply": an earlier
+  /// run's outputs; a matching folder counts whole), outside /proc, /sys and /dev, in a place where
+  /// it can be created, and holding none of `inputs` (nor being one); else quadrix::Error.
+  /// With FolderSharing::OwnFilesOnly other entries may stay; the command's own (existing ones
+  /// must be regular files, none an input) are replaced at commit() by one rename each, with
+  /// SIGINT, SIGTERM and SIGHUP blocked, so a signal cannot leave some old and some new.
   FolderReplacement(std::string option, std::string folder, std::vector<std::string> own_names,
-                    const std::vector<std::string>& inputs);
+                    const std::vector<std::string>& inputs, FolderSharing sharing = FolderSharing::Whole);
   /// Removes the staging folder unless committed.
   ~FolderReplacement();
   FolderReplacement(const FolderReplacement&) = delete;
   FolderReplacement& operator=(const FolderReplacement&) = delete;
 
-  /// Where the file `name` (one of own_names) is written: inside the staging folder (created on
-  /// the first call), tracked for removal on a signal.
+  /// The staging folder, created empty on the first call: a writer fills it as it would the folder.
+  std::string staging_folder();
+  /// Where the file `name` (matching one of own_names) is written: inside the staging folder.
   std::string path(const std::string& name);
-  /// Puts the staging folder in the folder's place at once (renameat2 RENAME_EXCHANGE when the
-  /// folder exists) and removes the old contents.
+  /// Puts the staging folder in the folder's place at once and then removes the old folder.
+  /// Nothing staged (staging_folder() never called): the folder is left as it is.
   void commit();
 
  private:
   std::string option_;
-  std::string folder_;
-  std::string staging_;
+  std::string folder_;   // as given, for messages
+  std::string target_;   // its canonical path: what is replaced (a symlink to a folder keeps pointing to it)
+  std::string root_;     // ".NAME.staging-PID" beside the target, removed whole on a signal
+  std::string staging_;  // root_/NAME: becomes the folder
   std::vector<std::string> own_names_;
-  std::vector<std::unique_ptr<RemovedOnSignal>> tracked_;
+  FolderSharing sharing_ = FolderSharing::Whole;
+  std::unique_ptr<RemovedOnSignal> tracked_;
   bool committed_ = false;
 };
 

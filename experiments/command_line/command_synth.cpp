@@ -3,6 +3,7 @@
 // `quadrix synth --list` names the scenes and sensors. `quadrix synth loop-closures` writes a
 // loop-closure benchmark set (loop_closure_set.h) instead of one scene's scans, and `quadrix synth drive`
 // a multi-session drive through a town with drifting odometry (town_drive.h), the mapping benchmark.
+#include "experiments/command_line/command_outputs.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/synthetic/loop_closure_set.h"
 #include "experiments/synthetic/synthetic_output.h"
@@ -90,8 +91,10 @@ void run_drive(const SynthCommandOptions& options) {
     if (name.empty()) throw Error("--sessions: expected sensor names separated by commas, got '" + options.sessions + "'");
     drive.sensors.push_back(sensor_with_overrides(name, options));
   }
+  FolderReplacement output("--out", options.out, {"scans", "SCANS.tsv", "truth.tsv", "README.md"}, {});
   const auto start = std::chrono::steady_clock::now();
-  const TownDriveSummary summary = write_town_drive(options.out, drive);
+  const TownDriveSummary summary = write_town_drive(output.staging_folder(), drive);
+  output.commit();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("town drive, seed %llu: %zu scans in %zu session(s), %zu points\n", static_cast<unsigned long long>(drive.seed),
               summary.plan.scans.size(), drive.sensors.size(), summary.points);
@@ -127,8 +130,10 @@ void run_command(const SynthCommandOptions& options) {
     loop_set.same_direction = options.second_pass == "same";
     loop_set.sensor = sensor;
     if (!options.source_sensor.empty()) loop_set.source_sensor = sensor_with_overrides(options.source_sensor, options);
+    FolderReplacement output("--out", options.out, {"pairs.tsv", "street_*"}, {});
     const auto start = std::chrono::steady_clock::now();
-    const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(options.out, loop_set);
+    const std::vector<LoopClosureSetPair> pairs = write_loop_closure_set(output.staging_folder(), loop_set);
+    output.commit();
     std::map<std::string, int> per_bin;
     for (const LoopClosureSetPair& pair : pairs) ++per_bin[pair.bin];
     std::printf("loop-closure set: %d streets from seed %llu, %zu pairs (", loop_set.streets,
@@ -151,6 +156,10 @@ void run_command(const SynthCommandOptions& options) {
   }
   output.binary = !options.ascii;
 
+  FolderReplacement folder("--out", options.out,
+                           {"scene.json", "primitives.json", "pairs.tsv", "point_counts.csv", "scan_*.ply", "scan_*.pcd",
+                            "pose_*.txt", "T_*_from_*.txt"},
+                           {options.poses});
   const auto start = std::chrono::steady_clock::now();
   StreetOptions street;
   street.foliage = foliage_from_name(options.foliage, "--foliage");
@@ -158,7 +167,8 @@ void run_command(const SynthCommandOptions& options) {
   const auto poses = options.poses.empty() ? default_sensor_poses(scene, sensor) : parse_pose_spec(options.poses);
   const SyntheticRun run = run_synthetic(scene, sensor, poses, options.seed);
   const auto simulated = std::chrono::steady_clock::now();
-  const auto files = write_synthetic_folder(options.out, run, output);
+  const auto files = write_synthetic_folder(folder.staging_folder(), run, output);
+  folder.commit();
   const auto finished = std::chrono::steady_clock::now();
 
   std::printf("scene %s (seed %llu): %zu primitives", scene.name.c_str(),
@@ -187,7 +197,7 @@ const CommandRegistration registration(20, [](CLI::App& app) {
   command->add_option("--poses", options->poses,
                       "Sensor->world poses: 'x,y,z,yaw_deg[,pitch_deg[,roll_deg]];...' or a file with one pose a line "
                       "(4-6 numbers, or 12/16 row-major). Default: a LiDAR registration pair, or six TLS stations");
-  command->add_option("--out", options->out, "Output folder (created; files of the same names are replaced)");
+  command->add_option("--out", options->out, "Output folder (replaced whole once everything is written; an existing one may hold only an earlier run's files)");
   command->add_option("--format", options->format, "Cloud format: ply or pcd")->capture_default_str();
   command->add_flag("--ascii", options->ascii, "Write ascii clouds instead of binary");
   command->add_option("--noise", options->noise, "Gaussian range noise sigma in metres (overrides the preset)");
