@@ -118,10 +118,22 @@ std::string write_text(const fs::path& path, const std::string& text) {
   return path.string();
 }
 
+// A new empty folder of this process: ctest runs each test in its own process, in parallel, so the
+// process id keeps one test from clearing another's files (the shared small pair included).
+// The folders are removed when the process ends.
 fs::path fresh_folder(const std::string& name) {
-  const fs::path folder = fs::temp_directory_path() / ("quadrix_red_team_" + name);
+  struct Created {
+    std::vector<fs::path> folders;
+    ~Created() {
+      std::error_code ignored;
+      for (const fs::path& folder : folders) fs::remove_all(folder, ignored);
+    }
+  };
+  static Created created;
+  const fs::path folder = fs::temp_directory_path() / ("quadrix_red_team_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(folder);
   fs::create_directories(folder);
+  created.folders.push_back(folder);
   return folder;
 }
 
