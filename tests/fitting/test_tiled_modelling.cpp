@@ -5,6 +5,8 @@
 #include "fitting/tiled_modelling.h"
 #include "geometry/constants.h"
 #include "geometry/error.h"
+#include "geometry/io.h"
+#include "tests/geometry/las_test_writer.h"
 
 #include <gtest/gtest.h>
 
@@ -145,6 +147,105 @@ TEST_F(TiledModelling, AnySplitIntoTileGroupsGivesTheSameModel) {
   EXPECT_THROW(merge_partial_models(parts, scene_extraction(), scene_modelling()), Error);
   parts.push_back(parts.front());
   EXPECT_THROW(merge_partial_models(parts, scene_extraction(), scene_modelling()), Error);
+}
+
+// The tiles read from a file chunk by chunk give the model the tiles read from memory give.
+TEST_F(TiledModelling, StreamingFromAFileGivesTheInMemoryModel) {
+  const Eigen::Matrix3Xf points = make_scene(6);
+  PointCloud cloud;
+  cloud.positions = points;
+  const std::string path = (folder / "scene.ply").string();
+  write_point_cloud(path, cloud);
+  tiling.tile_size = 6.0;
+  MatrixChunkSource memory(points, "scene");
+  const ModellingResult in_memory = model_tiled(memory, scene_extraction(), scene_modelling(), tiling);
+  FileChunkSource file({path});
+  ASSERT_TRUE(file.declared_points().has_value());
+  EXPECT_EQ(*file.declared_points(), static_cast<std::size_t>(points.cols()));
+  const ModellingResult streamed = model_tiled(file, scene_extraction(), scene_modelling(), tiling);
+  EXPECT_EQ(streamed.model.source_point_count, static_cast<std::size_t>(points.cols()));
+  ASSERT_EQ(streamed.model.size(), in_memory.model.size());
+  for (std::size_t i = 0; i < streamed.model.size(); ++i) {
+    EXPECT_EQ(streamed.model.types[i], in_memory.model.types[i]);
+    const auto a = streamed.model.records[i].to_array(), b = in_memory.model.records[i].to_array();
+    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-9) << "record " << i << " value " << k;
+  }
+  EXPECT_EQ(type_counts(streamed.model)[QuadricType::CircularCylinder], 1);
+  EXPECT_EQ(type_counts(streamed.model)[QuadricType::Plane], 2);
+
+  // Two files, the second moved by its pose: the source serves both in one frame.
+  PointCloud half_a, half_b;
+  half_a.positions = points.leftCols(points.cols() / 2);
+  const Eigen::Vector3d shift(100.0, -50.0, 2.0);
+  half_b.positions = points.rightCols(points.cols() - points.cols() / 2).colwise() - shift.cast<float>();
+  write_point_cloud((folder / "a.ply").string(), half_a);
+  write_point_cloud((folder / "b.ply").string(), half_b);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = shift;
+  FileChunkSource stations({(folder / "a.ply").string(), (folder / "b.ply").string()}, {Eigen::Isometry3d::Identity(), pose});
+  Eigen::Matrix3Xd chunk, all(3, 0);
+  for (int pass = 0; pass < 2; ++pass) {  // re-readable after rewind
+    stations.rewind();
+    all.resize(3, 0);
+    while (stations.next_chunk(chunk, 1000)) {
+      all.conservativeResize(3, all.cols() + chunk.cols());
+      all.rightCols(chunk.cols()) = chunk;
+    }
+    ASSERT_EQ(all.cols(), points.cols());
+    EXPECT_LT((all - points.cast<double>()).cwiseAbs().maxCoeff(), 1e-4);
+  }
+  EXPECT_THROW(FileChunkSource({(folder / "missing.ply").string()}), Error);
+  EXPECT_THROW(FileChunkSource({path}, {pose, pose}), Error);
+}
+
+// A small georeferenced LAS (UTM-sized coordinates in millimetre steps): the model from the file
+// is the local scene's, moved to the file's coordinates, with nothing lost to float32.
+TEST_F(TiledModelling, GeoreferencedLasIsModelledInTheFilesCoordinates) {
+  const Eigen::Matrix3Xf points = make_scene(7);
+  testing::LasTestFile las;
+  las.scale = Eigen::Vector3d::Constant(0.001);
+  // Whole tiles away (12 m), so the tile borders cut the scene where they cut the local copy.
+  las.offset = Eigen::Vector3d(12.0 * 41667.0, 12.0 * 333334.0, 120.0);
+  Eigen::Matrix3Xf local(3, points.cols());
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    testing::LasTestPoint p;
+    p.X = static_cast<std::int32_t>(std::lround(points(0, i) * 1000.0));
+    p.Y = static_cast<std::int32_t>(std::lround(points(1, i) * 1000.0));
+    p.Z = static_cast<std::int32_t>(std::lround(points(2, i) * 1000.0));
+    local.col(i) = Eigen::Vector3f(static_cast<float>(p.X * 0.001), static_cast<float>(p.Y * 0.001), static_cast<float>(p.Z * 0.001));
+    las.points.push_back(p);
+  }
+  const std::string path = (folder / "site.las").string();
+  testing::write_bytes(path, testing::las_test_bytes(las));
+  MatrixChunkSource memory(local, "scene");
+  const ModellingResult in_memory = model_tiled(memory, scene_extraction(), scene_modelling(), tiling);
+  ExtractionOptions georeferenced = scene_extraction();
+  georeferenced.sensor_origin += las.offset;
+  FileChunkSource file({path});
+  const ModellingResult streamed = model_tiled(file, georeferenced, scene_modelling(), tiling);
+  EXPECT_EQ(type_counts(streamed.model), type_counts(in_memory.model));
+  EXPECT_EQ(type_counts(streamed.model)[QuadricType::CircularCylinder], 1);
+  EXPECT_EQ(type_counts(streamed.model)[QuadricType::Plane], 2);
+  // Every piece's points are in the file's coordinates: the statistical centres lie at the offset.
+  for (std::size_t i = 0; i < streamed.model.augmented_begin; ++i)
+    EXPECT_LT((streamed.model.records[i].full_center - las.offset).norm(), 30.0) << "record " << i;
+  // Moved back to the scene's frame, the model is the local one (a quadric in ~10^6 m coordinates
+  // is compared where it is well conditioned).
+  const SceneModel back = translated(streamed.model, -las.offset);
+  ASSERT_TRUE(back.has_ground);
+  EXPECT_GT(back.ground_normal.z(), 0.999);
+  EXPECT_NEAR(back.ground_offset, 0.0, 0.01);  // the floor at z = 120 m in the file
+  int cylinders = 0;
+  for (std::size_t i = 0; i < back.augmented_begin; ++i) {
+    if (back.types[i] != QuadricType::CircularCylinder) continue;
+    ++cylinders;
+    const QuadricDecomposition shape = back.records[i].quadric().decompose();
+    EXPECT_NEAR(shape.scale.x(), 0.5, 0.02);
+    EXPECT_GT(std::abs(shape.rotation.col(2).x()), 0.999);  // along x
+    EXPECT_NEAR(shape.center.y(), 6.0, 0.02);               // the pipe's axis at y = 6, z = 1.5
+    EXPECT_NEAR(shape.center.z(), 1.5, 0.02);
+  }
+  EXPECT_EQ(cylinders, 1);
 }
 
 TEST_F(TiledModelling, BadInputIsAClearError) {
