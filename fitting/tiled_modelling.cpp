@@ -523,6 +523,7 @@ ModellingResult merge_partial_models(const std::vector<PartialModel>& parts, con
   std::vector<int> primitive_of_piece(pieces.size(), -1);
   std::vector<MergedPrimitive> primitives;
   for (std::size_t i = 0; i < pieces.size(); ++i) {
+    if (joined[i] < 0) continue;  // dissolved: larger primitives explain it
     const std::size_t holder = static_cast<std::size_t>(joined[i]);
     if (primitive_of_piece[holder] < 0) {
       primitive_of_piece[holder] = static_cast<int>(primitives.size());

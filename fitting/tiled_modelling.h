@@ -103,7 +103,7 @@ struct TilingOptions {
   int group = 0;                      ///< this process models tile group `group` of `groups` (0-based)
   int groups = 1;                     ///< number of tile groups the survey is split into
   std::string temporary_parent;       ///< folder in which the tile folder is made (empty: the system's temporary folder)
-  std::size_t sample_points = 4000;   ///< points kept per primitive piece for the merge refits and the final fit (ModellingOptions::maximum_fit_points)
+  std::size_t sample_points = 1000;   ///< points kept per primitive piece for the merge refits and the final fit (pass 3 holds them all: at 1,000 it stays below pass 2's tiles on a 200 M-point site; the constrained fitter solves on 1,500)
   std::function<void(const TilingProgress&)> progress;  ///< called as the passes advance (may be empty)
 };
 

@@ -2,6 +2,7 @@
 // wall and the floor; the pieces on both sides merge back into one primitive each, as the whole
 // cloud gives, whatever the split into tile groups.
 #include "fitting/extraction.h"
+#include "fitting/extraction_internal.h"
 #include "fitting/tiled_modelling.h"
 #include "geometry/constants.h"
 #include "geometry/error.h"
@@ -246,6 +247,71 @@ TEST_F(TiledModelling, GeoreferencedLasIsModelledInTheFilesCoordinates) {
     EXPECT_NEAR(shape.center.z(), 1.5, 0.02);
   }
   EXPECT_EQ(cylinders, 1);
+}
+
+// Points on a cone (apex, unit axis toward the opening, half-angle), from `near` to `far` along
+// the axis, over the azimuths [from, to) (radians), 2 mm noise.
+Eigen::Matrix3Xd cone_points(const Eigen::Vector3d& apex, const Eigen::Vector3d& axis, double half_angle, double near, double far,
+                             double from, double to, int count, std::uint64_t seed) {
+  std::mt19937_64 engine(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  const Eigen::Vector3d u = axis.unitOrthogonal(), v = axis.cross(u);
+  Eigen::Matrix3Xd points(3, count);
+  for (int i = 0; i < count; ++i) {
+    const double t = near + (far - near) * unit(engine), angle = from + (to - from) * unit(engine);
+    points.col(i) = apex + t * axis + t * std::tan(half_angle) * (std::cos(angle) * u + std::sin(angle) * v) +
+                    Eigen::Vector3d(noise(engine), noise(engine), noise(engine));
+  }
+  return points;
+}
+
+// The merge rules of pass 3 on cone pieces: two halves of one roof ring whose tiles fitted slightly
+// different cones join (refitted from their own cone, where the normals of two half arcs alone
+// may not pin the axis down), and a "cone" whose points are two walls meeting at a right angle
+// (a 45-degree cone along their corner fits them locally) is dissolved.
+TEST(TiledMerge, ConePiecesJoinAndACornerIsNoCone) {
+  const ShapeDetectionOptions options = extraction_preset("monument").shapes;
+  const Eigen::Vector3d apex(0.0, 0.0, 10.0), down(0.0, 0.0, -1.0);
+  const double angle = 26.565 * kPi / 180.0;
+  std::vector<detail::ShapePiece> pieces(3);
+  for (int half = 0; half < 2; ++half) {
+    detail::ShapePiece& piece = pieces[static_cast<std::size_t>(half)];
+    piece.type = QuadricType::CircularCone;
+    piece.points = cone_points(apex, down, angle, 6.0, 9.0, half * kPi, (half + 1) * kPi, 1000, 10 + half);
+    // Each tile's cone is off by a little: 1 degree of tilt, 2 cm of apex, 0.3 degrees of angle.
+    piece.axis = Eigen::AngleAxisd((half == 0 ? 1.0 : -1.0) * kPi / 180.0, Eigen::Vector3d::UnitX()) * down;
+    piece.point = apex + Eigen::Vector3d(0.0, 0.02 * half, 0.0);
+    piece.size = angle + (half == 0 ? 0.003 : -0.003);
+    piece.weight = half == 0 ? 40000.0 : 30000.0;
+  }
+  // Two walls x = 20 (y in [0, 2]) and y = 0 (x in [18, 20]), 1.5 m high, taken for a cone along
+  // their corner's bisector.
+  detail::ShapePiece& corner = pieces[2];
+  corner.type = QuadricType::CircularCone;
+  corner.points.resize(3, 800);
+  std::mt19937_64 engine(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (Eigen::Index i = 0; i < corner.points.cols(); ++i)
+    corner.points.col(i) = i % 2 == 0 ? Eigen::Vector3d(20.0, 2.0 * unit(engine), 1.5 * unit(engine))
+                                      : Eigen::Vector3d(18.0 + 2.0 * unit(engine), 0.0, 1.5 * unit(engine));
+  corner.axis = Eigen::Vector3d(-1.0, 1.0, 0.0).normalized();
+  corner.point = Eigen::Vector3d(20.0, 0.0, 0.75);
+  corner.size = 0.25 * kPi;
+  corner.weight = 800.0;
+  const std::vector<int> joined = detail::merge_shape_pieces(pieces, options, Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(joined.size(), 3u);
+  EXPECT_EQ(joined[0], 0);
+  EXPECT_EQ(joined[1], 0);   // the second half joined the first
+  EXPECT_EQ(joined[2], -1);  // the corner is dissolved
+  EXPECT_NEAR(pieces[0].size, angle, 0.5 * kPi / 180.0);
+  EXPECT_LT((pieces[0].point - apex).norm(), 0.05);
+
+  // A genuine cone piece two planes cannot explain stays.
+  std::vector<detail::ShapePiece> alone(1);
+  alone[0] = pieces[1];
+  alone[0].points = cone_points(apex, down, angle, 6.0, 9.0, 0.0, 0.5 * kPi, 1000, 12);
+  EXPECT_EQ(detail::merge_shape_pieces(alone, options, Eigen::Vector3d::UnitZ()), std::vector<int>{0});
 }
 
 TEST_F(TiledModelling, BadInputIsAClearError) {
