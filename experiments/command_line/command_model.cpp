@@ -511,11 +511,19 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
                 part.pieces.size(), options.out.c_str());
     return;
   }
-  const ModellingResult result = model_tiled(points, extraction, modelling, tiling);
-  const nlohmann::json tiling_json = {{"tile_size", tiling.tile_size}, {"margin", tiling.margin},
-                                      {"memory_budget", tiling.memory_budget}};
+  // model_tiled's passes, so the tile edge chosen from the budget is reported.
+  const auto start = std::chrono::steady_clock::now();
+  const PartialModel part = model_tile_group(points, extraction, tiling);
+  const double tiles_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (tiling.progress) tiling.progress({3, 0, 0, part.tiles, part.tiles, 0.0});
+  ModellingResult result = merge_partial_models({part}, extraction, modelling, tiling);
+  result.model.timings_ms["tiles"] = tiles_ms;
+  result.model.timings_ms["total"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const nlohmann::json tiling_json = {{"tile_size", part.tile_size}, {"tile_size_requested", tiling.tile_size},
+                                      {"tiles", part.tiles}, {"margin", tiling.margin}, {"memory_budget", tiling.memory_budget}};
   write_tiled_model(options.out, options.binary, source, options.inputs.size(), extraction.preset, modelling.fitter, result,
                     tiling_json.dump());
+  std::printf("tiles: %llu of %.1f m, margin %.1f m\n", static_cast<unsigned long long>(part.tiles), part.tile_size, tiling.margin);
 }
 
 // The files of a static scan streamed from disk when it is modelled tile by tile, so the scan is
