@@ -87,7 +87,8 @@ void bind_tiles(py::module_& module) {
 Passes 1 and 2 of tile-by-tile modelling for tile group ``tile`` (0-based) of ``tiles``: the shape
 pieces of those tiles as bytes (the partial model ``quadrix model --tile i/n`` writes), for ``merge_tiles``.
 
-cloud: a Cloud, an (N, 3) array or a file path (a path is what Dask workers are given).
+cloud: a Cloud, an (N, 3) array or a file path (a path is what Dask workers are given; it is read
+chunk by chunk, never whole, when its format can be streamed).
 preset: a static-scan preset (monument). tile_size: tile edge in metres (0: sized from a 2 GiB
 memory budget). margin: overlap modelled around each tile, metres.
 )doc");
