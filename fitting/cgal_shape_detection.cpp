@@ -23,6 +23,7 @@
 #include <limits>
 #include <new>
 #include <numeric>
+#include <random>
 #include <tuple>
 #include <unordered_map>
 
@@ -433,16 +434,27 @@ bool pieces_within(const Eigen::Matrix3Xd& points, const DetectedShape& a, const
   return false;
 }
 
-/// The same shape refitted to `members` (planes, cylinders with the given axis, spheres, cones).
-/// False when the fit fails.
+bool explains(const DetectedShape& candidate, const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members,
+              const ShapeDetectionOptions& shape_options);
+
+/// The same shape refitted to `members` (planes, cylinders with the given axis, spheres, cones
+/// from the shape's parameters, else from the normals). False when the fit fails.
 bool refit(const Eigen::Matrix3Xd& points, const Eigen::Matrix3Xd& normals, const std::vector<std::uint32_t>& members,
-           const DetectedShape& shape, DetectedShape& refitted) {
+           const DetectedShape& shape, const ShapeDetectionOptions& shape_options, DetectedShape& refitted) {
   refitted = shape;
   switch (shape.type) {
     case QuadricType::Plane: refitted = fit_plane(points, members); break;
     case QuadricType::CircularCylinder: if (!fit_cylinder(points, members, shape.axis, refitted)) return false; break;
     case QuadricType::Sphere: if (!fit_sphere(points, members, refitted)) return false; break;
-    case QuadricType::CircularCone: if (!fit_cone(points, normals, members, refitted)) return false; break;
+    case QuadricType::CircularCone:
+      // From the shape's own apex, axis and angle first: the normals of two partial arcs can pin
+      // the axis down worse than either piece's cone (two quarters of a roof ring), then from the
+      // normals alone.
+      if (!refine_cone(points, members, refitted) || !explains(refitted, points, members, shape_options)) {
+        refitted = shape;
+        if (!fit_cone(points, normals, members, refitted)) return false;
+      }
+      break;
     default: return false;
   }
   refitted.members = members;
@@ -695,7 +707,7 @@ void merge_similar_shapes(std::vector<DetectedShape>& shapes, const Eigen::Matri
       std::vector<std::uint32_t> united = shapes[a].members;
       united.insert(united.end(), shapes[b].members.begin(), shapes[b].members.end());
       DetectedShape candidate;
-      if (!refit(simplified, simplified_normals, united, shapes[a], candidate) ||
+      if (!refit(simplified, simplified_normals, united, shapes[a], shape_options, candidate) ||
           !explains(candidate, simplified, united, shape_options))
         continue;
       candidate.lower = shapes[a].lower.cwiseMin(shapes[b].lower);
@@ -824,6 +836,60 @@ Eigen::Vector3d surface_normal(const DetectedShape& shape, const Eigen::Vector3d
 
 }  // namespace
 
+namespace {
+
+/// Whether two planes explain `members` as well as a shape must (explained_rms, explained_fraction):
+/// the seam of two faces meeting at an angle, which a cone of half the angle between their normals
+/// fits locally (two walls at a right angle: a 45-degree cone along their corner). Each plane is
+/// the best of 256 planes through three members drawn with the options' seed (deterministic),
+/// refitted to its inliers; the second is sought among the members the first leaves.
+bool two_planes_explain(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members,
+                        const ShapeDetectionOptions& options) {
+  if (members.size() < 6) return false;
+  const double epsilon = options.epsilon;
+  std::mt19937 random(options.seed);
+  const auto best_plane = [&](const std::vector<std::uint32_t>& pool, DetectedShape& plane) {
+    if (pool.size() < 3) return false;
+    std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
+    std::size_t best_count = 0;
+    Eigen::Vector3d best_normal = Eigen::Vector3d::UnitZ(), best_point = Eigen::Vector3d::Zero();
+    for (int draw = 0; draw < 256; ++draw) {
+      const Eigen::Vector3d a = points.col(pool[pick(random)]), b = points.col(pool[pick(random)]), c = points.col(pool[pick(random)]);
+      const Eigen::Vector3d normal = (b - a).cross(c - a);
+      if (!(normal.norm() > 1e-9)) continue;
+      const Eigen::Vector3d unit = normal.normalized();
+      std::size_t count = 0;
+      for (const std::uint32_t i : pool) count += std::abs(unit.dot(points.col(i) - a)) <= epsilon ? 1 : 0;
+      if (count > best_count) best_count = count, best_normal = unit, best_point = a;
+    }
+    if (best_count < 3) return false;
+    std::vector<std::uint32_t> inliers;
+    for (const std::uint32_t i : pool)
+      if (std::abs(best_normal.dot(points.col(i) - best_point)) <= epsilon) inliers.push_back(i);
+    plane = fit_plane(points, inliers);
+    return true;
+  };
+  DetectedShape first, second;
+  if (!best_plane(members, first)) return false;
+  std::vector<std::uint32_t> rest;
+  for (const std::uint32_t i : members)
+    if (surface_distance(first, points.col(i)) > epsilon) rest.push_back(i);
+  if (!rest.empty() && !best_plane(rest, second)) second = first;
+  if (rest.empty()) second = first;
+  double squares = 0.0;
+  std::size_t inside = 0;
+  for (const std::uint32_t i : members) {
+    const double d = std::min(surface_distance(first, points.col(i)), surface_distance(second, points.col(i)));
+    squares += d * d;
+    inside += d <= epsilon ? 1 : 0;
+  }
+  const double count = static_cast<double>(members.size());
+  return std::sqrt(squares / count) <= options.explained_rms * epsilon &&
+         static_cast<double>(inside) >= options.explained_fraction * count;
+}
+
+}  // namespace
+
 namespace detail {
 
 std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const ShapeDetectionOptions& options,
@@ -857,19 +923,41 @@ std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const Shape
     update_bounds(points, shape);
   }
   if (shapes.size() > 1) merge_similar_shapes(shapes, points, normals, options, up);
-  // Each sorted piece's first point tells which kept shape now holds it.
+  // Joined pieces: each sorted piece's first point tells which kept shape now holds it.
   std::vector<int> holder_of_point(static_cast<std::size_t>(total), -1);
   for (std::size_t k = 0; k < shapes.size(); ++k)
     for (const std::uint32_t i : shapes[k].members) holder_of_point[i] = static_cast<int>(k);
-  std::vector<int> joined(pieces.size());
+  std::vector<int> holder_of_piece(shapes.size());
   column = 0;
   for (std::size_t k = 0; k < order.size(); ++k) {
     const ShapePiece& piece = pieces[static_cast<std::size_t>(order[k])];
-    int holder = static_cast<int>(k);
-    if (piece.points.cols() > 0 && holder_of_point[static_cast<std::size_t>(column)] >= 0)
-      holder = holder_of_point[static_cast<std::size_t>(column)];
-    joined[static_cast<std::size_t>(order[k])] = order[static_cast<std::size_t>(holder)];
+    holder_of_piece[k] = piece.points.cols() > 0 && holder_of_point[static_cast<std::size_t>(column)] >= 0
+                             ? holder_of_point[static_cast<std::size_t>(column)]
+                             : static_cast<int>(k);
     column += piece.points.cols();
+  }
+  // A primitive the larger ones explain is dissolved, as detect_shapes dissolves such a shape within
+  // one cloud (the seam of two walls a tile took for a 45-degree cone, with the walls' pieces in
+  // its neighbours): its pieces are left out, since their points cannot be split between the
+  // larger primitives any more.
+  std::vector<bool> dissolved(shapes.size(), false);
+  if (options.absorb_fraction <= 1.0) {
+    std::vector<bool> held(shapes.size(), false);
+    for (std::size_t k = 0; k < shapes.size(); ++k) held[k] = !shapes[k].members.empty();
+    absorb_explained_shapes(shapes, points, options);
+    for (std::size_t k = 0; k < shapes.size(); ++k) dissolved[k] = held[k] && shapes[k].members.empty();
+  }
+  // A cone that two planes explain is the seam of two faces whose larger pieces lie in other tiles.
+  for (std::size_t k = 0; k < shapes.size(); ++k)
+    if (shapes[k].type == QuadricType::CircularCone && !shapes[k].members.empty() &&
+        two_planes_explain(points, shapes[k].members, options)) {
+      shapes[k].members.clear();
+      dissolved[k] = true;
+    }
+  std::vector<int> joined(pieces.size());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const int holder = holder_of_piece[k];
+    joined[static_cast<std::size_t>(order[k])] = dissolved[static_cast<std::size_t>(holder)] ? -1 : order[static_cast<std::size_t>(holder)];
   }
   for (std::size_t k = 0; k < shapes.size(); ++k) {
     if (shapes[k].members.empty()) continue;

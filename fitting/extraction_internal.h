@@ -152,8 +152,9 @@ struct ShapePiece {
 
 /// Joins pieces of one shape by the rules detect_shapes applies to the pieces Efficient RANSAC
 /// returns (same type, close parameters, one shape refitted on both pieces' points explains them
-/// all; defined in cgal_shape_detection.cpp). Returns, for each piece, the index of the piece it
-/// joined (itself when it stays); kept pieces take the refitted parameters.
+/// all; then a shape the larger ones explain is dissolved; defined in cgal_shape_detection.cpp).
+/// Returns, for each piece, the index of the piece it joined (itself when it stays), or -1 when its
+/// shape was dissolved; kept pieces take the refitted parameters.
 std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const ShapeDetectionOptions& options,
                                     const Eigen::Vector3d& up);
 

@@ -28,15 +28,58 @@
 
 namespace quadrix {
 
-MatrixChunkSource::MatrixChunkSource(const Eigen::Matrix3Xf& points, std::string name)
-    : points_(points), name_(std::move(name)) {}
+MatrixChunkSource::MatrixChunkSource(const Eigen::Matrix3Xf& points, std::string name, const Eigen::Vector3d& origin)
+    : points_(points), name_(std::move(name)), origin_(origin) {}
 
 bool MatrixChunkSource::next_chunk(Eigen::Matrix3Xd& chunk, std::size_t maximum) {
   const Eigen::Index count = std::min<Eigen::Index>(static_cast<Eigen::Index>(maximum), points_.cols() - next_);
   if (count <= 0) return false;
-  chunk = points_.middleCols(next_, count).cast<double>();
+  chunk = points_.middleCols(next_, count).cast<double>().colwise() + origin_;
   next_ += count;
   return true;
+}
+
+FileChunkSource::FileChunkSource(std::vector<std::string> paths, std::vector<Eigen::Isometry3d> poses,
+                                 const PointStreamOptions& options)
+    : paths_(std::move(paths)), poses_(std::move(poses)), options_(options) {
+  if (paths_.empty()) throw Error("tiled modelling: no input file");
+  if (!poses_.empty() && poses_.size() != paths_.size())
+    throw Error("tiled modelling: " + std::to_string(poses_.size()) + " poses for " + std::to_string(paths_.size()) +
+                " files (expected one per file)");
+  std::size_t declared = 0;
+  bool all_declared = true;
+  for (const std::string& path : paths_) {
+    const std::unique_ptr<PointStream> stream = open_point_stream(path, options_);
+    if (stream->point_count()) declared += *stream->point_count();
+    else all_declared = false;
+  }
+  if (all_declared) declared_points_ = declared;
+}
+
+bool FileChunkSource::next_chunk(Eigen::Matrix3Xd& chunk, std::size_t maximum) {
+  while (file_ < paths_.size()) {
+    if (!stream_) stream_ = open_point_stream(paths_[file_], options_);
+    if (stream_->read(std::max<std::size_t>(1, maximum), chunk_)) {
+      if (poses_.empty()) chunk.swap(chunk_.positions);
+      else chunk.noalias() = poses_[file_] * chunk_.positions;  // Isometry3d * 3xN applies the rotation and translation
+      return true;
+    }
+    dropped_ += stream_->non_finite_dropped();
+    stream_.reset();
+    ++file_;
+  }
+  return false;
+}
+
+void FileChunkSource::rewind() {
+  stream_.reset();
+  file_ = 0;
+  dropped_ = 0;
+}
+
+std::string FileChunkSource::name() const {
+  const std::string first = std::filesystem::path(paths_.front()).filename().string();
+  return paths_.size() == 1 ? first : first + " + " + std::to_string(paths_.size() - 1) + " more";
 }
 
 bool tiling_needed(std::size_t points, const TilingOptions& options) {
@@ -480,6 +523,7 @@ ModellingResult merge_partial_models(const std::vector<PartialModel>& parts, con
   std::vector<int> primitive_of_piece(pieces.size(), -1);
   std::vector<MergedPrimitive> primitives;
   for (std::size_t i = 0; i < pieces.size(); ++i) {
+    if (joined[i] < 0) continue;  // dissolved: larger primitives explain it
     const std::size_t holder = static_cast<std::size_t>(joined[i]);
     if (primitive_of_piece[holder] < 0) {
       primitive_of_piece[holder] = static_cast<int>(primitives.size());

@@ -12,12 +12,15 @@
 #include "fitting/scene_model.h"
 #include "fitting/scene_modelling.h"
 #include "geometry/point_cloud.h"
+#include "geometry/point_stream.h"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,8 +41,9 @@ class PointChunkSource {
 /// Points already in memory as a chunk source (a cloud, or several moved into one frame).
 class MatrixChunkSource : public PointChunkSource {
  public:
-  /// Serves the columns of `points` (kept by reference: it must outlive the source).
-  MatrixChunkSource(const Eigen::Matrix3Xf& points, std::string name);
+  /// Serves the columns of `points` plus `origin` (a cloud read relative to its local origin is
+  /// served in the file's frame); `points` is kept by reference and must outlive the source.
+  MatrixChunkSource(const Eigen::Matrix3Xf& points, std::string name, const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
   bool next_chunk(Eigen::Matrix3Xd& chunk, std::size_t maximum) override;
   void rewind() override { next_ = 0; }
   std::string name() const override { return name_; }
@@ -47,7 +51,37 @@ class MatrixChunkSource : public PointChunkSource {
  private:
   const Eigen::Matrix3Xf& points_;
   std::string name_;
+  Eigen::Vector3d origin_;
   Eigen::Index next_ = 0;
+};
+
+/// Point-cloud files read chunk by chunk (geometry/point_stream.h) in the file's coordinates
+/// (double: georeferenced coordinates keep their precision), each moved by its pose into one frame
+/// (TLS stations). Only one file and one chunk are held at once, so memory does not grow with the
+/// files; rewind reopens the first file, so the tiler may read them as often as it needs.
+class FileChunkSource : public PointChunkSource {
+ public:
+  /// Opens every file once to check it can be streamed (quadrix::Error naming the file otherwise);
+  /// `poses` is empty (the files' own frame) or holds one sensor-to-world pose per file.
+  FileChunkSource(std::vector<std::string> paths, std::vector<Eigen::Isometry3d> poses = {},
+                  const PointStreamOptions& options = {});
+  bool next_chunk(Eigen::Matrix3Xd& chunk, std::size_t maximum) override;
+  void rewind() override;
+  std::string name() const override;
+  /// Records the files' headers declare, summed; nullopt when a file does not say (XYZ text).
+  std::optional<std::size_t> declared_points() const { return declared_points_; }
+  /// Records dropped so far because a coordinate was NaN or inf (since the last rewind).
+  std::size_t non_finite_dropped() const { return dropped_ + (stream_ ? stream_->non_finite_dropped() : 0); }
+
+ private:
+  std::vector<std::string> paths_;
+  std::vector<Eigen::Isometry3d> poses_;
+  PointStreamOptions options_;
+  std::optional<std::size_t> declared_points_;
+  std::size_t file_ = 0;                 ///< index of the file being read
+  std::unique_ptr<PointStream> stream_;  ///< that file, open (null before the first read or after the last)
+  PointChunk chunk_;                     ///< reused read buffer
+  std::size_t dropped_ = 0;              ///< non-finite records of the files already closed
 };
 
 /// Where the tiler is, for a progress display.
@@ -69,7 +103,7 @@ struct TilingOptions {
   int group = 0;                      ///< this process models tile group `group` of `groups` (0-based)
   int groups = 1;                     ///< number of tile groups the survey is split into
   std::string temporary_parent;       ///< folder in which the tile folder is made (empty: the system's temporary folder)
-  std::size_t sample_points = 4000;   ///< points kept per primitive piece for the merge refits and the final fit (ModellingOptions::maximum_fit_points)
+  std::size_t sample_points = 1000;   ///< points kept per primitive piece for the merge refits and the final fit (pass 3 holds them all: at 1,000 it stays below pass 2's tiles on a 200 M-point site; the constrained fitter solves on 1,500)
   std::function<void(const TilingProgress&)> progress;  ///< called as the passes advance (may be empty)
 };
 

@@ -458,6 +458,12 @@ std::map<std::pair<std::string, std::string>, int> quadric_counts_of(const Scene
   return counts;
 }
 
+// The inputs as named in messages: the first file, and how many more.
+std::string input_name(const ModelCommandOptions& options) {
+  return std::filesystem::path(options.inputs.front()).filename().string() +
+         (options.inputs.size() > 1 ? " + " + std::to_string(options.inputs.size() - 1) + " more" : "");
+}
+
 // Writes a merged tiled model (--out JSON, --binary) and prints its summary.
 void write_tiled_model(const std::string& out, const std::string& binary, const std::string& source, std::size_t inputs,
                        const std::string& preset, const std::string& fitter, const ModellingResult& result,
@@ -485,7 +491,7 @@ void write_tiled_model(const std::string& out, const std::string& binary, const 
 
 // A static scan tile by tile: the whole model, or with --tile i/n the partial model of one group.
 void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction, const ModellingOptions& modelling,
-               const PointCloud& cloud, const Eigen::Vector3d& sensor_origin, TilingOptions tiling) {
+               PointChunkSource& points, const Eigen::Vector3d& sensor_origin, TilingOptions tiling) {
   for (const auto& [flag, value] : std::initializer_list<std::pair<const char*, const std::string*>>{
            {"--labels", &options.labels}, {"--score-labels", &options.score_labels}, {"--mesh", &options.mesh},
            {"--elements", &options.elements}, {"--picture", &options.picture}})
@@ -494,9 +500,7 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
                   "model whole with a larger --memory-budget");
   extraction.sensor_origin = sensor_origin;  // tiles are modelled relative to their corners, in the file's frame
   tiling.progress = terminal_progress();
-  const std::string source = std::filesystem::path(options.inputs.front()).filename().string() +
-                             (options.inputs.size() > 1 ? " + " + std::to_string(options.inputs.size() - 1) + " more" : "");
-  MatrixChunkSource points(cloud.positions, source);
+  const std::string source = points.name();
   if (tiling.groups > 1) {
     const PartialModel part = model_tile_group(points, extraction, tiling);
     write_partial_model(options.out, part);
@@ -507,11 +511,58 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
                 part.pieces.size(), options.out.c_str());
     return;
   }
-  const ModellingResult result = model_tiled(points, extraction, modelling, tiling);
-  const nlohmann::json tiling_json = {{"tile_size", tiling.tile_size}, {"margin", tiling.margin},
-                                      {"memory_budget", tiling.memory_budget}};
-  write_tiled_model(options.out, options.binary, source, options.inputs.size(), options.preset, modelling.fitter, result,
+  // model_tiled's passes, so the tile edge chosen from the budget is reported.
+  const auto start = std::chrono::steady_clock::now();
+  const PartialModel part = model_tile_group(points, extraction, tiling);
+  const double tiles_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (tiling.progress) tiling.progress({3, 0, 0, part.tiles, part.tiles, 0.0});
+  ModellingResult result = merge_partial_models({part}, extraction, modelling, tiling);
+  result.model.timings_ms["tiles"] = tiles_ms;
+  result.model.timings_ms["total"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const nlohmann::json tiling_json = {{"tile_size", part.tile_size}, {"tile_size_requested", tiling.tile_size},
+                                      {"tiles", part.tiles}, {"margin", tiling.margin}, {"memory_budget", tiling.memory_budget}};
+  write_tiled_model(options.out, options.binary, source, options.inputs.size(), extraction.preset, modelling.fitter, result,
                     tiling_json.dump());
+  std::printf("tiles: %llu of %.1f m, margin %.1f m\n", static_cast<unsigned long long>(part.tiles), part.tile_size, tiling.margin);
+}
+
+// The files of a static scan streamed from disk when it is modelled tile by tile, so the scan is
+// never held whole: the preset is named, or auto on files whose headers declare more points than
+// the memory budget holds (auto's rule for more than 1.5 M points is the static scan, monument),
+// and the files can be read in chunks. Empty otherwise: the scan is read whole and the usual path
+// decides.
+std::unique_ptr<FileChunkSource> streamed_static_scan(const ModelCommandOptions& options, const TilingOptions& tiling,
+                                                      RegistrationOptions& registration, std::string& notes) {
+  if (!options.labels.empty() || !options.score_labels.empty()) return nullptr;  // need the cloud (refused tiled)
+  const bool forced = options.tile_size > 0.0 || !options.tile.empty();
+  if (options.preset != "auto") {
+    registration = resolve_registration_side(options.preset, PointCloud(), "source");
+    if (!options.config.empty()) apply_registration_config(options.config, registration, "source");
+    if (!registration.source_extraction.static_scan) return nullptr;
+  }
+  std::vector<Eigen::Isometry3d> poses;
+  if (!options.poses.empty()) {
+    if (options.poses.size() != options.inputs.size()) return nullptr;  // the whole read names the mismatch
+    for (const std::string& pose : options.poses) poses.push_back(read_pose_matrix(pose));
+  }
+  PointStreamOptions stream_options;
+  stream_options.format = cloud_format_from_name(options.format);
+  std::unique_ptr<FileChunkSource> source;
+  try {
+    source = std::make_unique<FileChunkSource>(options.inputs, poses, stream_options);
+  } catch (const Error&) {
+    return nullptr;  // not streamable (ascii PLY, CSV, ...) or bad: the whole read reads it or names the problem
+  }
+  const bool large = source->declared_points() && tiling_needed(*source->declared_points(), tiling);
+  if (options.preset == "auto") {
+    if (!large) return nullptr;  // auto measures the cloud
+    registration = registration_preset("monument");
+    if (!options.config.empty()) apply_registration_config(options.config, registration, "source");
+    notes = "source auto: " + std::to_string(*source->declared_points()) +
+            " points declared, above the memory budget: static scan, monument, tile by tile";
+    return source;
+  }
+  return forced || large ? std::move(source) : nullptr;
 }
 
 void run_merge(const ModelMergeOptions& options) {
@@ -574,6 +625,23 @@ void run(const ModelCommandOptions& options) {
   if (options.inputs.size() == 1 && options.poses.empty()) read_options.local_origin = LocalOrigin::Auto;
   if (centred && (options.inputs.size() != 1 || !options.poses.empty()))
     throw Error("--sensor-origin: takes one input without --poses (stations merged by pose are modelled in the world frame)");
+  {
+    // A static scan tiled from its files: never read whole.
+    RegistrationOptions registration;
+    std::string notes;
+    if (const std::unique_ptr<FileChunkSource> files = streamed_static_scan(options, tiling, registration, notes)) {
+      ExtractionOptions extraction = registration.source_extraction;
+      if (options.plane_method == "cgal") extraction.planes.method = PlaneMethod::CgalRegionGrowing;
+      ModellingOptions modelling = registration.modelling;
+      if (!options.fitter.empty()) modelling.fitter = options.fitter;
+      make_quadric_fitter(modelling.fitter);
+      // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
+      modelling.quadrics_per_class = std::numeric_limits<int>::max();
+      if (options.verbose && !notes.empty()) std::printf("%s\n", notes.c_str());
+      run_tiled(options, extraction, modelling, *files, sensor_origin, tiling);
+      return;
+    }
+  }
   const PointCloud cloud = read_merged_clouds(options, read_options);
   // A cloud in a map's frame is modelled centred on its sensor (the extraction measures ranges and
   // heights from the origin), and the model is moved back: every output is in the file's frame.
@@ -598,7 +666,9 @@ void run(const ModelCommandOptions& options) {
     // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
     modelling.quadrics_per_class = std::numeric_limits<int>::max();
     if (options.tile_size > 0.0 || !options.tile.empty() || tiling_needed(cloud.size(), tiling)) {
-      run_tiled(options, extraction, modelling, cloud, sensor_origin, tiling);
+      // Served in the file's frame (the cloud was read relative to its local origin).
+      MatrixChunkSource points(cloud.positions, input_name(options), cloud.local_origin);
+      run_tiled(options, extraction, modelling, points, sensor_origin, tiling);
       return;
     }
   }

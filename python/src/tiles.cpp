@@ -12,6 +12,7 @@
 #include <pybind11/stl.h>
 
 #include <filesystem>
+#include <memory>
 
 namespace quadrix::python {
 
@@ -48,6 +49,22 @@ ModellingOptions static_modelling(const std::string& preset, const py::object& f
   return modelling;
 }
 
+// The points of `cloud` as a chunk source: a file path is streamed from disk chunk by chunk (never
+// held whole; formats that cannot be streamed are read whole), a Cloud or an array is served from
+// memory in its file's frame. `holder` and `points` keep what the source refers to alive.
+std::unique_ptr<PointChunkSource> chunk_source(const py::object& cloud, std::shared_ptr<Cloud>& holder, const PointCloud*& points) {
+  if (py::isinstance<py::str>(cloud) || py::hasattr(cloud, "__fspath__")) {
+    const std::string path = path_from_object(cloud);
+    try {
+      return std::make_unique<FileChunkSource>(std::vector<std::string>{path});
+    } catch (const Error&) {
+      // not streamable (ascii PLY, CSV, NPY) or bad: the whole read reads it or names the problem
+    }
+  }
+  points = &cloud_from_object(cloud, "cloud", holder);
+  return std::make_unique<MatrixChunkSource>(points->positions, "cloud", points->local_origin);
+}
+
 }  // namespace
 
 void bind_tiles(py::module_& module) {
@@ -55,13 +72,13 @@ void bind_tiles(py::module_& module) {
       "model_tiles",
       [](const py::object& cloud, int tile, int tiles, const std::string& preset, double tile_size, double margin) {
         std::shared_ptr<Cloud> holder;
-        const PointCloud& points = cloud_from_object(cloud, "cloud", holder);
+        const PointCloud* points = nullptr;
+        const std::unique_ptr<PointChunkSource> source = chunk_source(cloud, holder, points);
         const ExtractionOptions extraction = static_extraction(preset);
         std::string bytes;
         {
           py::gil_scoped_release release;
-          MatrixChunkSource source(points.positions, "cloud");
-          bytes = partial_model_to_bytes(model_tile_group(source, extraction, tiling_of(tile, tiles, tile_size, margin)));
+          bytes = partial_model_to_bytes(model_tile_group(*source, extraction, tiling_of(tile, tiles, tile_size, margin)));
         }
         return py::bytes(bytes);
       },
@@ -70,7 +87,8 @@ void bind_tiles(py::module_& module) {
 Passes 1 and 2 of tile-by-tile modelling for tile group ``tile`` (0-based) of ``tiles``: the shape
 pieces of those tiles as bytes (the partial model ``quadrix model --tile i/n`` writes), for ``merge_tiles``.
 
-cloud: a Cloud, an (N, 3) array or a file path (a path is what Dask workers are given).
+cloud: a Cloud, an (N, 3) array or a file path (a path is what Dask workers are given; it is read
+chunk by chunk, never whole, when its format can be streamed).
 preset: a static-scan preset (monument). tile_size: tile edge in metres (0: sized from a 2 GiB
 memory budget). margin: overlap modelled around each tile, metres.
 )doc");
@@ -107,12 +125,12 @@ def _model_tiles_task(*arguments):
                const py::object& tiles, const py::object& fitter) {
         if (client.is_none()) {
           std::shared_ptr<Cloud> holder;
-          const PointCloud& points = cloud_from_object(cloud, "cloud", holder);
+          const PointCloud* points = nullptr;
+          const std::unique_ptr<PointChunkSource> source = chunk_source(cloud, holder, points);
           const ExtractionOptions extraction = static_extraction(preset);
           const ModellingOptions modelling = static_modelling(preset, fitter);
           py::gil_scoped_release release;
-          MatrixChunkSource source(points.positions, "cloud");
-          return model_of(model_tiled(source, extraction, modelling, tiling_of(0, 1, tile_size, margin)));
+          return model_of(model_tiled(*source, extraction, modelling, tiling_of(0, 1, tile_size, margin)));
         }
         if (!py::isinstance<py::str>(cloud) && !py::hasattr(cloud, "__fspath__"))
           throw Error("model_tiled: with client=, cloud must be a file path the workers can read");

@@ -2,9 +2,12 @@
 // wall and the floor; the pieces on both sides merge back into one primitive each, as the whole
 // cloud gives, whatever the split into tile groups.
 #include "fitting/extraction.h"
+#include "fitting/extraction_internal.h"
 #include "fitting/tiled_modelling.h"
 #include "geometry/constants.h"
 #include "geometry/error.h"
+#include "geometry/io.h"
+#include "tests/geometry/las_test_writer.h"
 
 #include <gtest/gtest.h>
 
@@ -145,6 +148,170 @@ TEST_F(TiledModelling, AnySplitIntoTileGroupsGivesTheSameModel) {
   EXPECT_THROW(merge_partial_models(parts, scene_extraction(), scene_modelling()), Error);
   parts.push_back(parts.front());
   EXPECT_THROW(merge_partial_models(parts, scene_extraction(), scene_modelling()), Error);
+}
+
+// The tiles read from a file chunk by chunk give the model the tiles read from memory give.
+TEST_F(TiledModelling, StreamingFromAFileGivesTheInMemoryModel) {
+  const Eigen::Matrix3Xf points = make_scene(6);
+  PointCloud cloud;
+  cloud.positions = points;
+  const std::string path = (folder / "scene.ply").string();
+  write_point_cloud(path, cloud);
+  tiling.tile_size = 6.0;
+  MatrixChunkSource memory(points, "scene");
+  const ModellingResult in_memory = model_tiled(memory, scene_extraction(), scene_modelling(), tiling);
+  FileChunkSource file({path});
+  ASSERT_TRUE(file.declared_points().has_value());
+  EXPECT_EQ(*file.declared_points(), static_cast<std::size_t>(points.cols()));
+  const ModellingResult streamed = model_tiled(file, scene_extraction(), scene_modelling(), tiling);
+  EXPECT_EQ(streamed.model.source_point_count, static_cast<std::size_t>(points.cols()));
+  ASSERT_EQ(streamed.model.size(), in_memory.model.size());
+  for (std::size_t i = 0; i < streamed.model.size(); ++i) {
+    EXPECT_EQ(streamed.model.types[i], in_memory.model.types[i]);
+    const auto a = streamed.model.records[i].to_array(), b = in_memory.model.records[i].to_array();
+    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-9) << "record " << i << " value " << k;
+  }
+  EXPECT_EQ(type_counts(streamed.model)[QuadricType::CircularCylinder], 1);
+  EXPECT_EQ(type_counts(streamed.model)[QuadricType::Plane], 2);
+
+  // Two files, the second moved by its pose: the source serves both in one frame.
+  PointCloud half_a, half_b;
+  half_a.positions = points.leftCols(points.cols() / 2);
+  const Eigen::Vector3d shift(100.0, -50.0, 2.0);
+  half_b.positions = points.rightCols(points.cols() - points.cols() / 2).colwise() - shift.cast<float>();
+  write_point_cloud((folder / "a.ply").string(), half_a);
+  write_point_cloud((folder / "b.ply").string(), half_b);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = shift;
+  FileChunkSource stations({(folder / "a.ply").string(), (folder / "b.ply").string()}, {Eigen::Isometry3d::Identity(), pose});
+  Eigen::Matrix3Xd chunk, all(3, 0);
+  for (int pass = 0; pass < 2; ++pass) {  // re-readable after rewind
+    stations.rewind();
+    all.resize(3, 0);
+    while (stations.next_chunk(chunk, 1000)) {
+      all.conservativeResize(3, all.cols() + chunk.cols());
+      all.rightCols(chunk.cols()) = chunk;
+    }
+    ASSERT_EQ(all.cols(), points.cols());
+    EXPECT_LT((all - points.cast<double>()).cwiseAbs().maxCoeff(), 1e-4);
+  }
+  EXPECT_THROW(FileChunkSource({(folder / "missing.ply").string()}), Error);
+  EXPECT_THROW(FileChunkSource({path}, {pose, pose}), Error);
+}
+
+// A small georeferenced LAS (UTM-sized coordinates in millimetre steps): the model from the file
+// is the local scene's, moved to the file's coordinates, with nothing lost to float32.
+TEST_F(TiledModelling, GeoreferencedLasIsModelledInTheFilesCoordinates) {
+  const Eigen::Matrix3Xf points = make_scene(7);
+  testing::LasTestFile las;
+  las.scale = Eigen::Vector3d::Constant(0.001);
+  // Whole tiles away (12 m), so the tile borders cut the scene where they cut the local copy.
+  las.offset = Eigen::Vector3d(12.0 * 41667.0, 12.0 * 333334.0, 120.0);
+  Eigen::Matrix3Xf local(3, points.cols());
+  for (Eigen::Index i = 0; i < points.cols(); ++i) {
+    testing::LasTestPoint p;
+    p.X = static_cast<std::int32_t>(std::lround(points(0, i) * 1000.0));
+    p.Y = static_cast<std::int32_t>(std::lround(points(1, i) * 1000.0));
+    p.Z = static_cast<std::int32_t>(std::lround(points(2, i) * 1000.0));
+    local.col(i) = Eigen::Vector3f(static_cast<float>(p.X * 0.001), static_cast<float>(p.Y * 0.001), static_cast<float>(p.Z * 0.001));
+    las.points.push_back(p);
+  }
+  const std::string path = (folder / "site.las").string();
+  testing::write_bytes(path, testing::las_test_bytes(las));
+  MatrixChunkSource memory(local, "scene");
+  const ModellingResult in_memory = model_tiled(memory, scene_extraction(), scene_modelling(), tiling);
+  ExtractionOptions georeferenced = scene_extraction();
+  georeferenced.sensor_origin += las.offset;
+  FileChunkSource file({path});
+  const ModellingResult streamed = model_tiled(file, georeferenced, scene_modelling(), tiling);
+  EXPECT_EQ(type_counts(streamed.model), type_counts(in_memory.model));
+  EXPECT_EQ(type_counts(streamed.model)[QuadricType::CircularCylinder], 1);
+  EXPECT_EQ(type_counts(streamed.model)[QuadricType::Plane], 2);
+  // Every piece's points are in the file's coordinates: the statistical centres lie at the offset.
+  for (std::size_t i = 0; i < streamed.model.augmented_begin; ++i)
+    EXPECT_LT((streamed.model.records[i].full_center - las.offset).norm(), 30.0) << "record " << i;
+  // Moved back to the scene's frame, the model is the local one (a quadric in ~10^6 m coordinates
+  // is compared where it is well conditioned).
+  const SceneModel back = translated(streamed.model, -las.offset);
+  ASSERT_TRUE(back.has_ground);
+  EXPECT_GT(back.ground_normal.z(), 0.999);
+  EXPECT_NEAR(back.ground_offset, 0.0, 0.01);  // the floor at z = 120 m in the file
+  int cylinders = 0;
+  for (std::size_t i = 0; i < back.augmented_begin; ++i) {
+    if (back.types[i] != QuadricType::CircularCylinder) continue;
+    ++cylinders;
+    const QuadricDecomposition shape = back.records[i].quadric().decompose();
+    EXPECT_NEAR(shape.scale.x(), 0.5, 0.02);
+    EXPECT_GT(std::abs(shape.rotation.col(2).x()), 0.999);  // along x
+    EXPECT_NEAR(shape.center.y(), 6.0, 0.02);               // the pipe's axis at y = 6, z = 1.5
+    EXPECT_NEAR(shape.center.z(), 1.5, 0.02);
+  }
+  EXPECT_EQ(cylinders, 1);
+}
+
+// Points on a cone (apex, unit axis toward the opening, half-angle), from `near` to `far` along
+// the axis, over the azimuths [from, to) (radians), 2 mm noise.
+Eigen::Matrix3Xd cone_points(const Eigen::Vector3d& apex, const Eigen::Vector3d& axis, double half_angle, double near, double far,
+                             double from, double to, int count, std::uint64_t seed) {
+  std::mt19937_64 engine(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  const Eigen::Vector3d u = axis.unitOrthogonal(), v = axis.cross(u);
+  Eigen::Matrix3Xd points(3, count);
+  for (int i = 0; i < count; ++i) {
+    const double t = near + (far - near) * unit(engine), angle = from + (to - from) * unit(engine);
+    points.col(i) = apex + t * axis + t * std::tan(half_angle) * (std::cos(angle) * u + std::sin(angle) * v) +
+                    Eigen::Vector3d(noise(engine), noise(engine), noise(engine));
+  }
+  return points;
+}
+
+// The merge rules of pass 3 on cone pieces: two halves of one roof ring whose tiles fitted slightly
+// different cones join (refitted from their own cone, where the normals of two half arcs alone
+// may not pin the axis down), and a "cone" whose points are two walls meeting at a right angle
+// (a 45-degree cone along their corner fits them locally) is dissolved.
+TEST(TiledMerge, ConePiecesJoinAndACornerIsNoCone) {
+  const ShapeDetectionOptions options = extraction_preset("monument").shapes;
+  const Eigen::Vector3d apex(0.0, 0.0, 10.0), down(0.0, 0.0, -1.0);
+  const double angle = 26.565 * kPi / 180.0;
+  std::vector<detail::ShapePiece> pieces(3);
+  for (int half = 0; half < 2; ++half) {
+    detail::ShapePiece& piece = pieces[static_cast<std::size_t>(half)];
+    piece.type = QuadricType::CircularCone;
+    piece.points = cone_points(apex, down, angle, 6.0, 9.0, half * kPi, (half + 1) * kPi, 1000, 10 + half);
+    // Each tile's cone is off by a little: 1 degree of tilt, 2 cm of apex, 0.3 degrees of angle.
+    piece.axis = Eigen::AngleAxisd((half == 0 ? 1.0 : -1.0) * kPi / 180.0, Eigen::Vector3d::UnitX()) * down;
+    piece.point = apex + Eigen::Vector3d(0.0, 0.02 * half, 0.0);
+    piece.size = angle + (half == 0 ? 0.003 : -0.003);
+    piece.weight = half == 0 ? 40000.0 : 30000.0;
+  }
+  // Two walls x = 20 (y in [0, 2]) and y = 0 (x in [18, 20]), 1.5 m high, taken for a cone along
+  // their corner's bisector.
+  detail::ShapePiece& corner = pieces[2];
+  corner.type = QuadricType::CircularCone;
+  corner.points.resize(3, 800);
+  std::mt19937_64 engine(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (Eigen::Index i = 0; i < corner.points.cols(); ++i)
+    corner.points.col(i) = i % 2 == 0 ? Eigen::Vector3d(20.0, 2.0 * unit(engine), 1.5 * unit(engine))
+                                      : Eigen::Vector3d(18.0 + 2.0 * unit(engine), 0.0, 1.5 * unit(engine));
+  corner.axis = Eigen::Vector3d(-1.0, 1.0, 0.0).normalized();
+  corner.point = Eigen::Vector3d(20.0, 0.0, 0.75);
+  corner.size = 0.25 * kPi;
+  corner.weight = 800.0;
+  const std::vector<int> joined = detail::merge_shape_pieces(pieces, options, Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(joined.size(), 3u);
+  EXPECT_EQ(joined[0], 0);
+  EXPECT_EQ(joined[1], 0);   // the second half joined the first
+  EXPECT_EQ(joined[2], -1);  // the corner is dissolved
+  EXPECT_NEAR(pieces[0].size, angle, 0.5 * kPi / 180.0);
+  EXPECT_LT((pieces[0].point - apex).norm(), 0.05);
+
+  // A genuine cone piece two planes cannot explain stays.
+  std::vector<detail::ShapePiece> alone(1);
+  alone[0] = pieces[1];
+  alone[0].points = cone_points(apex, down, angle, 6.0, 9.0, 0.0, 0.5 * kPi, 1000, 12);
+  EXPECT_EQ(detail::merge_shape_pieces(alone, options, Eigen::Vector3d::UnitZ()), std::vector<int>{0});
 }
 
 TEST_F(TiledModelling, BadInputIsAClearError) {
