@@ -161,8 +161,12 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
   json << "},\n  \"ms_per_scan\": " << json_number(result.timings_ms.count("total") ? result.timings_ms.at("total") / result.list.scans.size() : 0.0);
   json << ",\n  \"options\": {\"preset\": " << json_string(options.preset) << ", \"loop_radius\": " << json_number(options.loop_radius)
        << ", \"loop_radius_growth\": " << json_number(options.loop_radius_growth)
+       << ", \"maximum_loop_radius\": " << json_number(options.maximum_loop_radius)
        << ", \"minimum_loop_travel\": " << json_number(options.minimum_loop_travel)
        << ", \"candidates_per_scan\": " << options.candidates_per_scan
+       << ", \"minimum_candidate_spacing\": " << json_number(options.minimum_candidate_spacing)
+       << ", \"loop_information\": " << (options.loop_information_from_registration ? "\"registration\"" : "\"fixed\"")
+       << ", \"loop_information_scale\": " << json_number(options.loop_information_scale)
        << ", \"place_candidates_per_scan\": " << options.place_candidates_per_scan
        << ", \"use_ambiguous_edges\": " << (options.use_ambiguous_edges ? "true" : "false")
        << ", \"dcs_phi\": " << json_number(options.graph.dcs_phi) << "}";
@@ -202,14 +206,19 @@ void write_map(const std::string& folder, const MapResult& result, const MapOpti
     edges << "from_session,from_scan,to_session,to_scan,kind,status,used";
     for (int row = 0; row < 3; ++row)
       for (int column = 0; column < 4; ++column) edges << ",t" << row << column;
-    edges << ",across_sessions,overlap,chi2_before,chi2_after,dcs_scale,registration_ms,note\n";
+    edges << ",across_sessions,overlap,chi2_before,chi2_after,dcs_scale,registration_ms,inliers,inlier_rmse,registration_information,note\n";
     for (const MapEdge& edge : result.edges) {
       edges << csv_field(list.scans[edge.from].session) << ',' << csv_field(list.scans[edge.from].scan) << ','
             << csv_field(list.scans[edge.to].session) << ',' << csv_field(list.scans[edge.to].scan) << ','
             << (edge.kind == MapEdgeKind::Odometry ? "odometry" : "loop") << ',' << edge.status << ',' << (edge.used ? 1 : 0) << ','
             << pose_numbers(edge.transform, ',') << ',' << (edge.across_sessions ? 1 : 0) << ',' << json_number(edge.overlap) << ','
             << json_number(edge.chi2_before) << ',' << json_number(edge.chi2_after) << ',' << json_number(edge.dcs_scale) << ','
-            << json_number(edge.registration_ms) << ',' << csv_field(edge.note) << '\n';
+            << json_number(edge.registration_ms) << ',' << edge.inliers << ',' << json_number(edge.inlier_rmse) << ',';
+      // The registration's H: its 21 upper-triangular numbers row by row, space-separated.
+      for (int row = 0; row < 6; ++row)
+        for (int column = row; column < 6; ++column)
+          edges << (row + column > 0 ? " " : "") << json_number(edge.registration_information(row, column));
+      edges << ',' << csv_field(edge.note) << '\n';
     }
     write_text(temporary / "edges.csv", edges.str());
     write_text(temporary / "report.json", report_json(result, options, evaluation_json));
@@ -342,6 +351,7 @@ MapEvaluation evaluate_map(const MapResult& result, const std::vector<PoseRow>& 
   }
   // Loop edges against the truth: wrong beyond 2 m or 5 deg (the paper's success rule).
   std::vector<bool> closed(count, false);
+  std::vector<std::pair<std::size_t, std::size_t>> ok_loops;  // (earlier scan, later scan) of each ok loop edge
   for (std::size_t index = 0; index < result.edges.size(); ++index) {
     const MapEdge& edge = result.edges[index];
     if (edge.kind != MapEdgeKind::Loop) continue;
@@ -351,6 +361,7 @@ MapEvaluation evaluate_map(const MapResult& result, const std::vector<PoseRow>& 
       ++evaluation.ok_loop_edges;
       if (!right) ++evaluation.wrong_ok_loop_edges;
       closed[edge.from] = true;
+      if (right) ok_loops.emplace_back(edge.to, edge.from);
     }
     if (edge.used) {
       ++evaluation.used_loop_edges;
@@ -380,6 +391,29 @@ MapEvaluation evaluate_map(const MapResult& result, const std::vector<PoseRow>& 
       ++evaluation.true_revisits;
       if (closed[scan]) ++evaluation.closed_revisits;
     }
+    // Returns: an earlier scan within the radius although the path left the radius in between (a
+    // scan a few metres back on the same street is no return), or any within it in another session.
+    std::vector<bool> returns_to(scan, false);
+    bool returned = false, left = false;
+    for (std::size_t other = scan; other-- > 0;) {
+      const double distance = (truth[scan].translation() - truth[other].translation()).norm();
+      if (list.scans[other].session != list.scans[scan].session) {
+        returns_to[other] = distance <= revisit_radius;
+      } else if (distance > revisit_radius) {
+        left = true;
+      } else {
+        returns_to[other] = left;
+      }
+      returned = returned || returns_to[other];
+    }
+    if (returned) {
+      ++evaluation.returns;
+      for (const auto& [to, from] : ok_loops)
+        if (from == scan && returns_to[to]) {
+          ++evaluation.closed_returns;
+          break;
+        }
+    }
     if (place_revisit && scan < result.place_ranking.size() && !result.place_ranking[scan].empty()) {
       ++evaluation.place_queries;
       for (std::size_t other : result.place_ranking[scan])
@@ -404,6 +438,7 @@ std::string map_evaluation_json(const MapEvaluation& evaluation) {
        << ", \"ok_loop_edges\": " << evaluation.ok_loop_edges << ", \"wrong_ok_loop_edges\": " << evaluation.wrong_ok_loop_edges
        << ", \"precision\": " << json_number(evaluation.precision) << ", \"true_revisits\": " << evaluation.true_revisits
        << ", \"closed_revisits\": " << evaluation.closed_revisits << ", \"recall\": " << json_number(evaluation.recall)
+       << ", \"returns\": " << evaluation.returns << ", \"closed_returns\": " << evaluation.closed_returns
        << ", \"place_queries\": " << evaluation.place_queries << ", \"place_hits\": " << evaluation.place_hits << "}";
   return json.str();
 }

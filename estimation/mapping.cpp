@@ -249,7 +249,16 @@ MapEdge register_pair(std::size_t from, std::size_t to, MapEdgeKind kind, const 
   edge.status = registration_status_name(result.status);
   edge.transform = result.transform;
   edge.overlap = result.overlap ? result.overlap->transformed : 0.0;
+  edge.inliers = result.correspondences.size();
+  edge.inlier_rmse = result.inlier_rmse;
+  edge.registration_information = result.information;
   edge.information = diagonal_information(options.loop_rotation_sigma_degrees * kDegrees, options.loop_translation_sigma);
+  if (options.loop_information_from_registration && edge.inliers > 0) {
+    // H perturbs the answer on the left about the target's origin; the graph's error turns about the
+    // source's position p, e = A δ with A = [[I, 0], [-[p]x, I]]: Ω = A^-T H A^-1.
+    const Information6d moved = information_about_shifted_origin(result.information, -result.transform.translation());
+    edge.information = options.loop_information_scale / static_cast<double>(edge.inliers) * 0.5 * (moved + moved.transpose());
+  }
   edge.note = result.status == RegistrationStatus::Ok ? "" : result.message;
   edge.registration_ms = elapsed_ms(start);
   return edge;

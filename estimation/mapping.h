@@ -36,12 +36,12 @@ struct MapOptions {
   std::string preset = "auto";                 ///< registration preset of every scan (registration_preset name, or auto per scan)
   double maximum_median_range = 1000.0;        ///< a scan whose median point lies farther from its sensor is in another unit (millimetres), m: Error
   // Loop candidates within a session (LIO-SAM's radius search).
-  double loop_radius = 15.0;                   ///< search radius around the odometry position right after a loop, m (LIO-SAM's 15; on the BALM walk with drift, 8 m closed 11-13 of 28 true revisits, 15 m 23 of 28, none wrong: docs/mapping.md)
+  double loop_radius = 30.0;                   ///< search radius around the odometry position right after a loop, m (LIO-SAM's is 15; the registration solves pairs 20-30 m apart, and on the tuning town drive 30 m closed every return within 30 m and the candidates just behind on the same street measured the odometry's scale error: docs/mapping.md)
   double loop_radius_growth = 0.05;            ///< the radius grows by this many metres per metre travelled since the last accepted loop (odometry drift)
-  double maximum_loop_radius = 30.0;           ///< the radius never exceeds this, m
+  double maximum_loop_radius = 45.0;           ///< the radius never exceeds this, m
   double minimum_loop_travel = 15.0;           ///< a candidate lies at least this far back along the path, m (LIO-SAM: 30 s)
   std::size_t candidates_per_scan = 2;         ///< the nearest this many candidates of each scan are registered
-  double minimum_candidate_spacing = 3.0;      ///< candidates of one scan lie at least this far apart along the path, m
+  double minimum_candidate_spacing = 30.0;     ///< candidates of one scan lie at least this far apart along the path, m: one a pass, so that a return competes with the scans just behind on the same street rather than with their neighbours
   // Across sessions.
   std::size_t place_candidates_per_scan = 3;   ///< the best-ranked this many scans of other sessions are registered with each scan
   std::size_t place_query_stride = 1;          ///< query every this many scans of a session across sessions
@@ -49,8 +49,10 @@ struct MapOptions {
   bool register_consecutive = true;            ///< sessions without odometry are registered scan to scan
   // Loop edges into the graph.
   bool use_ambiguous_edges = true;             ///< ambiguous loop edges enter the graph as switchable edges under DCS (else only `ok` ones): on the BALM walk's validation seeds the RPE fell from 0.67 to 0.57 % and 0.52 to 0.47 % (docs/mapping.md)
-  double loop_translation_sigma = 0.1;         ///< standard deviation of a loop edge's translation, m (when the registration gives no information)
+  double loop_translation_sigma = 0.1;         ///< standard deviation of a loop edge's translation, m (fixed information: loop_information_from_registration off, or an answer without inliers)
   double loop_rotation_sigma_degrees = 0.5;    ///< standard deviation of its rotation, degrees
+  bool loop_information_from_registration = false;  ///< a loop edge's information is the registration's H (moved to the graph's error) divided by its inlier count and scaled by loop_information_scale, instead of the fixed sigmas (off: it lowered the tuning drive's ATE from 0.124 to 0.108 m but raised the validation drive's from 0.056 to 0.060 m, docs/mapping.md)
+  double loop_information_scale = 1.7e5;       ///< that scale, 1/m²: the mean χ² of right loop edges against the truth is 6 (their degrees of freedom) on the tuning town drive (docs/mapping.md)
   // Odometry drift (the information of odometry edges).
   double odometry_translation_drift = 0.05;    ///< odometry's translation error per metre travelled (5%)
   double odometry_rotation_drift_degrees = 1.0;///< odometry's rotation error per metre travelled, degrees
@@ -76,6 +78,9 @@ struct MapEdge {
   Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< maps `from` points into the `to` frame
   Information6d information = Information6d::Identity();       ///< rotation then translation
   double overlap = 0.0;                        ///< dense overlap of the registration (0 for given odometry)
+  std::size_t inliers = 0;                     ///< the registration's inlier correspondences (RegistrationResult::correspondences)
+  double inlier_rmse = 0.0;                    ///< their RMS point distance, m
+  Information6d registration_information = Information6d::Zero();  ///< the registration's point-to-plane H = JᵀJ (RegistrationResult::information: left perturbation in the `to` frame)
   double registration_ms = 0.0;                ///< time of the registration
   double chi2_before = 0.0;                    ///< χ² at the odometry poses (used edges)
   double chi2_after = 0.0;                     ///< χ² at the optimised poses (used edges)
@@ -185,6 +190,8 @@ struct MapEvaluation {
   double precision = 1.0;              ///< 1 - wrong/used (1 with no used edge)
   std::size_t true_revisits = 0;       ///< scans with a true revisit: an earlier scan within 30 m and at least minimum_loop_travel back (or in another session)
   std::size_t closed_revisits = 0;     ///< of those, joined to some earlier scan by an ok loop edge
+  std::size_t returns = 0;             ///< scans that came back: an earlier scan within the radius although the true path left that radius in between (or in another session)
+  std::size_t closed_returns = 0;      ///< of those, joined by an ok loop edge to such an earlier scan
   double recall = 0.0;                 ///< closed / true revisits
   std::size_t place_queries = 0;       ///< scans with a true revisit in another session within 10 m
   std::size_t place_hits = 0;          ///< of those, with such a scan among their ranked candidates

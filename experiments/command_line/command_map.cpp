@@ -160,6 +160,8 @@ void run(const MapCommandOptions& options) {
     std::printf("loop edges: %zu used, %zu wrong (precision %.3f); %zu ok, %zu wrong; recall %zu / %zu revisits within 30 m (%.3f)\n",
                 evaluation->used_loop_edges, evaluation->wrong_used_loop_edges, evaluation->precision, evaluation->ok_loop_edges,
                 evaluation->wrong_ok_loop_edges, evaluation->closed_revisits, evaluation->true_revisits, evaluation->recall);
+    std::printf("returns (an earlier scan within 30 m after the path left 30 m, or another session's): %zu / %zu closed by a right ok loop edge\n",
+                evaluation->closed_returns, evaluation->returns);
     if (evaluation->place_queries > 0)
       std::printf("place recognition: %zu / %zu scans revisiting another session had a true match (10 m) among their candidates\n",
                   evaluation->place_hits, evaluation->place_queries);
@@ -182,6 +184,12 @@ const CommandRegistration registration(75, [](CLI::App& app) {
   command->add_option("--loop-radius", options->map.loop_radius, "Radius of the loop search right after a loop, m");
   command->add_option("--loop-radius-growth", options->map.loop_radius_growth, "Radius growth per metre travelled since the last loop");
   command->add_option("--minimum-loop-travel", options->map.minimum_loop_travel, "A loop candidate lies at least this far back along the path, m");
+  command->add_option("--maximum-loop-radius", options->map.maximum_loop_radius, "The loop search radius never exceeds this, m");
+  command->add_option("--candidate-spacing", options->map.minimum_candidate_spacing, "Loop candidates of one scan lie at least this far apart along the path, m");
+  command->add_flag("--registration-information", options->map.loop_information_from_registration,
+                    "Loop edges carry the registration's information (H / inliers x --information-scale) instead of fixed sigmas (0.1 m, 0.5 deg)");
+  command->add_option("--information-scale", options->map.loop_information_scale, "Scale of the registration's information per inlier, 1/m^2")
+      ->check(CLI::PositiveNumber);
   command->add_option("--candidates-per-scan", options->map.candidates_per_scan, "Loop candidates registered per scan within a session");
   command->add_option("--place-candidates", options->map.place_candidates_per_scan, "Candidates per scan across sessions (place descriptor)");
   command->add_flag("!--no-ambiguous-edges", options->map.use_ambiguous_edges,

@@ -150,6 +150,52 @@ TEST(MapEvaluation, UmeyamaRecoversARigidMotionAndKittiErrorIsZeroOnTheTruth) {
   EXPECT_NEAR(std::get<0>(kitti_relative_error(biased, truth)), 1.0, 1e-6);
 }
 
+TEST(MapEvaluation, ReturnsAreLoopsNotTheScansJustBehind) {
+  // A square block of 4 x 100 m driven once, 5 m a scan, then 30 m more along its first side: the
+  // scans of that last stretch return to the start, those before only have scans behind them.
+  MapResult result;
+  std::vector<PoseRow> truth;
+  const auto at = [](double s) {
+    const int side = std::min(3, static_cast<int>(s / 100.0));
+    const double along = s - 100.0 * side;
+    const Eigen::Vector3d corners[4] = {{0, 0, 0}, {100, 0, 0}, {100, 100, 0}, {0, 100, 0}};
+    const Eigen::Vector3d directions[4] = {{1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};
+    return s >= 400.0 ? Eigen::Vector3d(s - 400.0, 0, 0) : Eigen::Vector3d(corners[side] + along * directions[side]);
+  };
+  for (int index = 0; index <= 86; ++index) {  // 0 .. 430 m
+    ScanEntry entry;
+    entry.session = "a";
+    entry.scan = std::to_string(index) + ".ply";
+    result.list.scans.push_back(entry);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = at(5.0 * index);
+    result.poses.push_back(pose);
+    result.odometry.push_back(pose);
+    result.in_map_frame.push_back(true);
+    truth.push_back({"a", entry.scan, pose, ""});
+  }
+  result.list.sessions = {"a"};
+  const auto loop = [&](std::size_t from, std::size_t to, const Eigen::Isometry3d& error) {
+    MapEdge edge;
+    edge.from = from, edge.to = to, edge.kind = MapEdgeKind::Loop, edge.status = "ok", edge.used = true;
+    edge.transform = error * result.poses[to].inverse() * result.poses[from];
+    result.edges.push_back(edge);
+  };
+  loop(10, 6, Eigen::Isometry3d::Identity());   // 20 m behind on the same street: no loop
+  loop(82, 2, Eigen::Isometry3d::Identity());   // 410 m back at the start, 0 m apart: a return closed
+  Eigen::Isometry3d wrong = Eigen::Isometry3d::Identity();
+  wrong.translation() = Eigen::Vector3d(3, 0, 0);
+  loop(84, 3, wrong);                           // a return, but the edge is 3 m off: not closed
+  const MapEvaluation evaluation = evaluate_map(result, truth, 30.0, 15.0);
+  // Returns: the last side's final 30 m (scans 74..80, within 30 m of the start, which the path
+  // left around the block) and the second pass over the first side (81..86): 13. The corners are
+  // none: every scan between a corner's two sides stays within 30 m.
+  EXPECT_EQ(evaluation.returns, 13u);
+  EXPECT_EQ(evaluation.closed_returns, 1u) << "only the right edge to an earlier pass closes a return";
+  EXPECT_EQ(evaluation.wrong_used_loop_edges, 1u);
+  EXPECT_GT(evaluation.true_revisits, 70u) << "the older count takes nearly every scan as a revisit";
+}
+
 /// The BALM walk as a scan list with odometry that drifts: each step of the true motion is followed
 /// by a yaw of `yaw_bias_degrees` per metre plus noise (seeded), integrated from the first pose.
 struct DriftedWalk {
@@ -208,7 +254,7 @@ TEST(MappingBalm, DriftedWalkIsClosedWithinFifteenCentimetres) {
   TemporaryFolder folder;
   const DriftedWalk walk = drifted_balm(folder.path, 2026, 0, 44, 0.5);
   MapOptions options;
-  options.loop_radius = 8.0;  // 19 candidate pairs instead of the default radius's 51: the test stays near a minute
+  options.loop_radius = 8.0;  // fewer candidate pairs than the default radius gives: the test stays near a minute
   const MapResult result = map_scans(walk.list, options);
   const MapEvaluation evaluation = evaluate_map(result, walk.truth);
   std::printf("BALM, 44 scans: ATE %.3f m (odometry %.3f m); loop edges used %zu, wrong %zu; ok %zu wrong %zu; recall %zu/%zu; %.0f ms a scan\n",
