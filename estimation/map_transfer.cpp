@@ -138,6 +138,9 @@ std::string map_edge_to_bytes(const MapEdge& edge) {
   const Eigen::Matrix4d transform = edge.transform.matrix();
   out.put_matrix(transform.data(), 16);
   out.put_matrix(edge.information.data(), 36);
+  out.put<std::uint64_t>(edge.inliers);
+  out.put<double>(edge.inlier_rmse);
+  out.put_matrix(edge.registration_information.data(), 36);
   for (double value : {edge.overlap, edge.registration_ms, edge.chi2_before, edge.chi2_after, edge.dcs_scale}) out.put<double>(value);
   out.put_text(edge.note);
   return out.take();
@@ -159,6 +162,9 @@ MapEdge map_edge_from_bytes(const std::string& bytes, const std::string& source_
   in.get_matrix(transform.data(), 16, "transform");
   edge.transform.matrix() = transform;
   in.get_matrix(edge.information.data(), 36, "information");
+  edge.inliers = static_cast<std::size_t>(in.get<std::uint64_t>("inliers"));
+  edge.inlier_rmse = in.get<double>("inlier_rmse");
+  in.get_matrix(edge.registration_information.data(), 36, "registration_information");
   for (double* value : {&edge.overlap, &edge.registration_ms, &edge.chi2_before, &edge.chi2_after, &edge.dcs_scale})
     *value = in.get<double>("numbers");
   edge.note = in.get_text("note");

@@ -428,6 +428,9 @@ TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
   edge.status = "ambiguous";
   edge.transform = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()) * Eigen::Translation3d(1.0 / 3.0, 2, -5);
   edge.information(1, 4) = 0.25;
+  edge.inliers = 12345;
+  edge.inlier_rmse = 0.0421;
+  edge.registration_information(5, 0) = 1.0 / 7.0;
   edge.note = "why";
   const MapEdge edge_back = map_edge_from_bytes(map_edge_to_bytes(edge));
   EXPECT_EQ(edge_back.from, 7u);
@@ -435,6 +438,9 @@ TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
   EXPECT_EQ(edge_back.status, "ambiguous");
   EXPECT_EQ(edge_back.transform.matrix(), edge.transform.matrix());
   EXPECT_EQ(edge_back.information, edge.information);
+  EXPECT_EQ(edge_back.inliers, edge.inliers);
+  EXPECT_EQ(edge_back.inlier_rmse, edge.inlier_rmse);
+  EXPECT_EQ(edge_back.registration_information, edge.registration_information);
   EXPECT_EQ(edge_back.note, "why");
   EXPECT_NE(error_of([&] { map_edge_from_bytes(bytes); }).find("bad magic"), std::string::npos);
 }
