@@ -169,6 +169,8 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
        << ", \"loop_information_scale\": " << json_number(options.loop_information_scale)
        << ", \"place_candidates_per_scan\": " << options.place_candidates_per_scan
        << ", \"use_ambiguous_edges\": " << (options.use_ambiguous_edges ? "true" : "false")
+       << ", \"use_ambiguous_edges_across_sessions\": " << (options.use_ambiguous_edges_across_sessions ? "true" : "false")
+       << ", \"odometry_gate_sigmas\": " << json_number(options.odometry_gate_sigmas)
        << ", \"dcs_phi\": " << json_number(options.graph.dcs_phi) << "}";
   if (!evaluation_json.empty()) json << ",\n  \"evaluation\": " << evaluation_json;
   json << "\n}\n";

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <list>
 #include <mutex>
 #include <numeric>
@@ -321,6 +322,29 @@ std::vector<double> path_lengths(const std::vector<Eigen::Isometry3d>& poses, st
 
 }  // namespace
 
+bool consistent_with_odometry(const Eigen::Isometry3d& measured, const Eigen::Isometry3d& predicted, double path,
+                              const MapOptions& options, std::string* why) {
+  const double k = options.odometry_gate_sigmas;
+  if (!(k > 0.0)) return true;
+  constexpr double kDegree = 3.14159265358979323846 / 180.0;
+  const double rotation_sigma = std::max(options.odometry_rotation_floor_degrees, options.odometry_rotation_drift_degrees * path);
+  const double rotation_limit = k * rotation_sigma;
+  if (rotation_limit >= 180.0) return true;
+  const double translation_limit = k * std::max(options.odometry_translation_floor, options.odometry_translation_drift * path) +
+                                   path * std::sin(std::min(rotation_limit, 90.0) * kDegree);
+  const double rotation = Eigen::AngleAxisd(predicted.linear().transpose() * measured.linear()).angle() / kDegree;
+  const double translation = (measured.translation() - predicted.translation()).norm();
+  if (rotation <= rotation_limit && translation <= translation_limit) return true;
+  if (why != nullptr) {
+    char text[256];
+    std::snprintf(text, sizeof(text),
+                  "departs from the odometry by %.1f deg and %.2f m over %.1f m of path (limits %.1f deg, %.2f m)", rotation,
+                  translation, path, rotation_limit, translation_limit);
+    *why = text;
+  }
+  return false;
+}
+
 MappedScan model_map_scan(const ScanList& list, std::size_t index, const MapOptions& options) {
   if (index >= list.scans.size()) throw Error(list.source + ": no scan " + std::to_string(index) + " in the list");
   return mapped_of(model_one_scan(list, index, options));
@@ -569,9 +593,24 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
 
   // The pose graph.
   stage = Clock::now();
+  // Odometry travelled along each session, for the gate of loop edges within a session.
+  std::vector<double> travelled_at(count, 0.0);
+  for (const auto& [begin, end] : sessions) {
+    const std::vector<double> travelled = path_lengths(result.odometry, begin, end);
+    for (std::size_t index = begin; index < end; ++index) travelled_at[index] = travelled[index - begin];
+  }
   for (MapEdge& edge : loop_edges) {
-    edge.used = edge.status == "ok" || (options.use_ambiguous_edges && edge.status == "ambiguous");
+    const bool ambiguous_allowed =
+        edge.across_sessions ? options.use_ambiguous_edges_across_sessions : options.use_ambiguous_edges;
+    edge.used = edge.status == "ok" || (ambiguous_allowed && edge.status == "ambiguous");
     if (!edge.used && edge.note.empty()) edge.note = "not in the graph (" + edge.status + ")";
+    std::string why;
+    if (edge.used && !edge.across_sessions &&
+        !consistent_with_odometry(edge.transform, result.odometry[edge.to].inverse() * result.odometry[edge.from],
+                                  std::abs(travelled_at[edge.from] - travelled_at[edge.to]), options, &why)) {
+      edge.used = false;
+      edge.note = "not in the graph: " + why;
+    }
   }
   result.edges = odometry_edges;
   result.edges.insert(result.edges.end(), loop_edges.begin(), loop_edges.end());

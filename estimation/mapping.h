@@ -48,7 +48,9 @@ struct MapOptions {
   // Odometry when none is given.
   bool register_consecutive = true;            ///< sessions without odometry are registered scan to scan
   // Loop edges into the graph.
-  bool use_ambiguous_edges = true;             ///< ambiguous loop edges enter the graph as switchable edges under DCS (else only `ok` ones): on the BALM walk's validation seeds the RPE fell from 0.67 to 0.57 % and 0.52 to 0.47 % (docs/mapping.md)
+  bool use_ambiguous_edges = true;             ///< ambiguous loop edges within a session enter the graph as switchable edges under DCS (else only `ok` ones): on the BALM walk's validation seeds the RPE fell from 0.67 to 0.57 % and 0.52 to 0.47 % (docs/mapping.md)
+  bool use_ambiguous_edges_across_sessions = false;  ///< ambiguous loop edges between sessions enter the graph too (off: nothing arbitrates them, no odometry joins two sessions, and on the three-sensor town drive 884 of 903 were wrong and placed the sessions 197 m off, docs/mapping.md)
+  double odometry_gate_sigmas = 5.0;           ///< a loop edge within a session stays out of the graph when its rotation or translation departs from the odometry's relative pose by more than this many of the odometry drift's standard deviations over the path between the two scans (consistent_with_odometry; 0: no gate)
   double loop_translation_sigma = 0.1;         ///< standard deviation of a loop edge's translation, m (fixed information: loop_information_from_registration off, or an answer without inliers)
   double loop_rotation_sigma_degrees = 0.5;    ///< standard deviation of its rotation, degrees
   bool loop_information_from_registration = false;  ///< a loop edge's information is the registration's H (moved to the graph's error) divided by its inlier count and scaled by loop_information_scale, instead of the fixed sigmas (off: it lowered the tuning drive's ATE from 0.124 to 0.108 m but raised the validation drive's from 0.056 to 0.060 m, docs/mapping.md)
@@ -63,6 +65,17 @@ struct MapOptions {
   std::size_t cloud_cache = 6;                 ///< clouds kept in memory for verification at once
   std::optional<RegistrationOptions> registration_options;  ///< fixed options (both extractions included) for every scan and pair instead of resolving `preset` per scan
 };
+
+/// Whether a loop edge between two scans of one session agrees with their odometry: `measured` and
+/// `predicted` (the odometry's relative pose) map the same scan into the same frame, `path` metres of
+/// the odometry lie between the scans. With the drift's standard deviations σ_r = max(floor, rotation
+/// drift · path) and σ_t = max(floor, translation drift · path) (MapOptions::odometry_*), the edge
+/// agrees when its rotation departs by at most k σ_r and its translation by at most k σ_t + path ·
+/// sin(min(k σ_r, 90°)) (the rotation's lever arm), k = options.odometry_gate_sigmas. Over a long path
+/// the gate opens (k σ_r ≥ 180°): a loop after a long drive is the registration's to judge. `why`
+/// (when given) receives the departure and the limits when the edge does not agree.
+bool consistent_with_odometry(const Eigen::Isometry3d& measured, const Eigen::Isometry3d& predicted, double path,
+                              const MapOptions& options, std::string* why = nullptr);
 
 /// Kind of an edge.
 enum class MapEdgeKind { Odometry, Loop };

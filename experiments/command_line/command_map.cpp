@@ -66,7 +66,13 @@ int run_on_scheduler(const MapCommandOptions& options) {
                                         std::to_string(options.map.candidates_per_scan), "--place-candidates",
                                         std::to_string(options.map.place_candidates_per_scan), "--map-voxel", number(options.map.map_voxel)};
   if (!options.truth.empty()) arguments.insert(arguments.end(), {"--gt", options.truth});
+  arguments.insert(arguments.end(), {"--maximum-loop-radius", number(options.map.maximum_loop_radius), "--candidate-spacing",
+                                     number(options.map.minimum_candidate_spacing), "--information-scale",
+                                     number(options.map.loop_information_scale), "--odometry-gate",
+                                     number(options.map.odometry_gate_sigmas)});
   if (!options.map.use_ambiguous_edges) arguments.push_back("--no-ambiguous-edges");
+  if (options.map.use_ambiguous_edges_across_sessions) arguments.push_back("--ambiguous-edges-across-sessions");
+  if (options.map.loop_information_from_registration) arguments.push_back("--registration-information");
   std::vector<char*> argv;
   for (std::string& argument : arguments) argv.push_back(argument.data());
   argv.push_back(nullptr);
@@ -193,7 +199,13 @@ const CommandRegistration registration(75, [](CLI::App& app) {
   command->add_option("--candidates-per-scan", options->map.candidates_per_scan, "Loop candidates registered per scan within a session");
   command->add_option("--place-candidates", options->map.place_candidates_per_scan, "Candidates per scan across sessions (place descriptor)");
   command->add_flag("!--no-ambiguous-edges", options->map.use_ambiguous_edges,
-                    "Leave ambiguous loop edges out of the graph (default: in, as switchable edges under DCS)");
+                    "Leave ambiguous loop edges within a session out of the graph (default: in, as switchable edges under DCS)");
+  command->add_flag("--ambiguous-edges-across-sessions", options->map.use_ambiguous_edges_across_sessions,
+                    "Let ambiguous loop edges between sessions into the graph too (default: out; no odometry arbitrates them)");
+  command->add_option("--odometry-gate", options->map.odometry_gate_sigmas,
+                      "Loop edges within a session departing from the odometry by more than this many drift sigmas stay out (0: no gate)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   command->add_option("--map-voxel", options->map.map_voxel, "map.ply keeps one point per cube of this edge, m");
   command->callback([options] { run(*options); });
 });

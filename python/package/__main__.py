@@ -25,7 +25,16 @@ def _parser():
     command.add_argument("--minimum-loop-travel", type=float, help="A loop candidate lies at least this far back along the path, m")
     command.add_argument("--candidates-per-scan", type=int, help="Loop candidates registered per scan within a session")
     command.add_argument("--place-candidates", type=int, help="Candidates per scan across sessions (place descriptor)")
+    command.add_argument("--maximum-loop-radius", type=float, help="The loop search radius never exceeds this, m")
+    command.add_argument("--candidate-spacing", type=float, help="Loop candidates of one scan lie at least this far apart along the path, m")
+    command.add_argument("--registration-information", action="store_true",
+                         help="Loop edges carry the registration's information instead of fixed sigmas")
+    command.add_argument("--information-scale", type=float, help="Scale of the registration's information per inlier, 1/m^2")
+    command.add_argument("--odometry-gate", type=float, help="Loop edges within a session departing from the odometry by more "
+                         "than this many drift sigmas stay out of the graph (0: no gate)")
     command.add_argument("--no-ambiguous-edges", action="store_true", help="Leave ambiguous loop edges out of the graph")
+    command.add_argument("--ambiguous-edges-across-sessions", action="store_true",
+                         help="Let ambiguous loop edges between sessions into the graph too")
     command.add_argument("--map-voxel", type=float, help="map.ply keeps one point per cube of this edge, m")
     return parser
 
@@ -34,7 +43,9 @@ def _options(arguments):
     """quadrix.map's keyword options from the parsed arguments (only those given)."""
     names = {"loop_radius": "loop_radius", "loop_radius_growth": "loop_radius_growth",
              "minimum_loop_travel": "minimum_loop_travel", "candidates_per_scan": "candidates_per_scan",
-             "place_candidates": "place_candidates_per_scan", "map_voxel": "map_voxel"}
+             "place_candidates": "place_candidates_per_scan", "map_voxel": "map_voxel",
+             "maximum_loop_radius": "maximum_loop_radius", "candidate_spacing": "minimum_candidate_spacing",
+             "information_scale": "loop_information_scale", "odometry_gate": "odometry_gate_sigmas"}
     options = {"preset": arguments.preset}
     for argument, option in names.items():
         value = getattr(arguments, argument)
@@ -42,6 +53,10 @@ def _options(arguments):
             options[option] = value
     if arguments.no_ambiguous_edges:
         options["use_ambiguous_edges"] = False
+    if arguments.ambiguous_edges_across_sessions:
+        options["use_ambiguous_edges_across_sessions"] = True
+    if arguments.registration_information:
+        options["loop_information_from_registration"] = True
     return options
 
 

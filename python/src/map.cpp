@@ -55,6 +55,10 @@ MapOptions map_options_from(const py::dict& keywords) {
       else if (key == "place_query_stride") options.place_query_stride = value.cast<std::size_t>();
       else if (key == "register_consecutive") options.register_consecutive = value.cast<bool>();
       else if (key == "use_ambiguous_edges") options.use_ambiguous_edges = value.cast<bool>();
+      else if (key == "use_ambiguous_edges_across_sessions") options.use_ambiguous_edges_across_sessions = value.cast<bool>();
+      else if (key == "odometry_gate_sigmas") options.odometry_gate_sigmas = value.cast<double>();
+      else if (key == "loop_information_from_registration") options.loop_information_from_registration = value.cast<bool>();
+      else if (key == "loop_information_scale") options.loop_information_scale = value.cast<double>();
       else if (key == "loop_translation_sigma") options.loop_translation_sigma = value.cast<double>();
       else if (key == "loop_rotation_sigma_degrees") options.loop_rotation_sigma_degrees = value.cast<double>();
       else if (key == "odometry_translation_drift") options.odometry_translation_drift = value.cast<double>();
@@ -431,6 +435,8 @@ progress: called as progress(stage, done, total) as scans are modelled and pairs
 Keyword options: the members of MapOptions (preset, loop_radius, loop_radius_growth,
 maximum_loop_radius, minimum_loop_travel, candidates_per_scan, minimum_candidate_spacing,
 place_candidates_per_scan, place_query_stride, register_consecutive, use_ambiguous_edges,
+use_ambiguous_edges_across_sessions, odometry_gate_sigmas, loop_information_from_registration,
+loop_information_scale,
 loop_translation_sigma, loop_rotation_sigma_degrees, odometry_translation_drift,
 odometry_rotation_drift_degrees, odometry_translation_floor, odometry_rotation_floor_degrees,
 map_voxel, cloud_cache) and config (a dict or YAML file of registration options for a named preset).

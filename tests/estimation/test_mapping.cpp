@@ -447,3 +447,47 @@ TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
 
 }  // namespace
 }  // namespace quadrix
+
+namespace quadrix {
+namespace {
+
+// The odometry gate of loop edges within a session: a right edge a few tens of metres back passes;
+// the same edge turned by a half turn, or shifted by metres, does not; after a long path the gate
+// opens and leaves the edge to the registration; k = 0 switches it off.
+TEST(OdometryGate, KeepsRightLoopEdgesAndRefusesHalfTurnsAtShortRange) {
+  const MapOptions options;  // 5 sigmas of 1 deg and 5 % a metre
+  std::mt19937 random(31);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  for (int trial = 0; trial < 50; ++trial) {
+    const double path = 16.0 + 12.0 * (trial % 5);  // 16 to 64 m back along the path
+    Eigen::Isometry3d predicted = Eigen::Isometry3d::Identity();
+    predicted.linear() = Eigen::AngleAxisd(0.3 * noise(random), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    predicted.translation() = Eigen::Vector3d(-path, 2.0 * noise(random), 0.1 * noise(random));
+    // The truth departs from the odometry by its drift: 0.5 deg and 1 % of the path, at most.
+    Eigen::Isometry3d right = predicted;
+    right.linear() = Eigen::AngleAxisd(0.5 * 3.14159265358979 / 180.0 * noise(random), Eigen::Vector3d::UnitZ()) * right.linear();
+    right.translation() += 0.01 * path * Eigen::Vector3d(noise(random), noise(random), 0.0).normalized();
+    EXPECT_TRUE(consistent_with_odometry(right, predicted, path, options)) << "path " << path;
+    Eigen::Isometry3d turned = right;
+    turned.linear() = Eigen::AngleAxisd(3.14159265358979, Eigen::Vector3d::UnitZ()) * turned.linear();
+    std::string why;
+    if (path < 36.0) {  // 5 sigmas of 1 deg a metre reach 180 deg at 36 m
+      EXPECT_FALSE(consistent_with_odometry(turned, predicted, path, options, &why)) << "path " << path;
+      EXPECT_NE(why.find("departs from the odometry by 1"), std::string::npos) << why;  // 170-180 deg
+    } else {
+      EXPECT_TRUE(consistent_with_odometry(turned, predicted, path, options)) << "the gate is open after " << path << " m";
+    }
+  }
+  // A shift of 30 m at 16 m of path (a scan matched to the wrong pass of a street) is refused.
+  Eigen::Isometry3d predicted = Eigen::Isometry3d::Identity();
+  predicted.translation() = Eigen::Vector3d(-16.0, 0.0, 0.0);
+  Eigen::Isometry3d shifted = predicted;
+  shifted.translation().x() += 30.0;
+  EXPECT_FALSE(consistent_with_odometry(shifted, predicted, 16.0, options));
+  MapOptions off;
+  off.odometry_gate_sigmas = 0.0;
+  EXPECT_TRUE(consistent_with_odometry(shifted, predicted, 16.0, off));
+}
+
+}  // namespace
+}  // namespace quadrix
