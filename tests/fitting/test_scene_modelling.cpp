@@ -315,7 +315,17 @@ TEST(SceneModelling, DegenerateInputsGiveValidModels) {
   EXPECT_NE(single.message.find("no ground"), std::string::npos) << single.message;
   ASSERT_EQ(single.model.augmented_begin, 1u);
   EXPECT_EQ(single.model.types[0], QuadricType::Plane);
-  EXPECT_GT(single.model.augmented_count(), 50u);  // 30 x 5 m wall at 0.5 m voxels
+  // Augmented points on one plane would all carry the plane's own FPFH and add no constraint: none,
+  // and the message says why.
+  EXPECT_EQ(single.model.augmented_count(), 0u);
+  EXPECT_NE(single.message.find("lies on one plane"), std::string::npos) << single.message;
+  // The same wall with a second wall at a right angle is not one plane: it is augmented.
+  PointCloud corner = wall;
+  corner.positions.conservativeResize(3, 6000);
+  for (int i = 3000; i < 6000; ++i) corner.positions.col(i) = Eigen::Vector3f(15.0f, 6.0f + 0.5f * (along(engine) + 15.0f), height(engine));
+  const ModellingResult two = model_scene(corner, extraction_preset("vlp64"), ModellingOptions());
+  EXPECT_EQ(two.message.find("lies on one plane"), std::string::npos) << two.message;
+  EXPECT_GT(two.model.augmented_count(), 50u);
 }
 
 TEST(SceneModelling, FitterIsSelectableByName) {
