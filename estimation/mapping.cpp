@@ -4,6 +4,7 @@
 
 #include "estimation/registration_config.h"
 #include "fitting/scene_modelling.h"
+#include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
 
@@ -326,7 +327,7 @@ bool consistent_with_odometry(const Eigen::Isometry3d& measured, const Eigen::Is
                               const MapOptions& options, std::string* why) {
   const double k = options.odometry_gate_sigmas;
   if (!(k > 0.0)) return true;
-  constexpr double kDegree = 3.14159265358979323846 / 180.0;
+  constexpr double kDegree = kPi / 180.0;
   const double rotation_sigma = std::max(options.odometry_rotation_floor_degrees, options.odometry_rotation_drift_degrees * path);
   const double rotation_limit = k * rotation_sigma;
   if (rotation_limit >= 180.0) return true;
@@ -384,6 +385,10 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
   // Model every scan once (paper §"Quadric-based Scene Representation"); only the models stay in memory.
   Clock::time_point stage = Clock::now();
   std::vector<ScanModel> models;
+  // A model made elsewhere comes without its registration options (they follow from the cloud the
+  // worker read), so pairs of such models are registered by the executor too.
+  if (executor.model && !executor.register_pairs)
+    throw Error(list.source + ": a map executor that models the scans must also register the pairs");
   if (executor.model) {
     std::vector<std::size_t> every(count);
     std::iota(every.begin(), every.end(), std::size_t{0});

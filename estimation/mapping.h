@@ -146,7 +146,9 @@ struct MapPairRequest {
 /// candidates within its session; every pair across sessions at once; one pair at a time along a
 /// chain of consecutive scans without odometry), so any executor that runs model_map_scan and
 /// register_map_pair (on any machine reading the same files) gives the same map. An empty member
-/// runs that part in this process (TBB), with the models kept in memory.
+/// runs that part in this process (TBB), with the models kept in memory; `model` without
+/// `register_pairs` is an Error (a model made elsewhere comes without the registration options its
+/// pairs need).
 struct MapExecutor {
   /// Models the scans of these indices (model_map_scan each); returns their models in the same order.
   std::function<std::vector<MappedScan>(const std::vector<std::size_t>& scans)> model;

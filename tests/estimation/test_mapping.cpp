@@ -352,6 +352,10 @@ TEST(MappingExecutor, AnotherExecutorSeesTheBatchesAndGivesTheSameMap) {
     return edges;
   };
   const MapResult elsewhere = map_scans(list, options, {}, executor);
+  // Models made elsewhere carry no registration options: registering their pairs here is refused.
+  MapExecutor models_only;
+  models_only.model = executor.model;
+  EXPECT_THROW(map_scans(list, options, {}, models_only), Error);
 
   // Batches: every scan modelled at once; the chain of session b one pair at a time in time order,
   // each from its local guess; within session a, one batch per scan; across, one batch of all.
