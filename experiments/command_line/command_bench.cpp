@@ -6,7 +6,7 @@
 // printed. `quadrix bench merge DIR... --out DIR` merges shard folders into the summary of one run.
 #include "experiments/benchmark/bench_pairs.h"
 #include "experiments/benchmark/benchmark_runner.h"
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "estimation/registration_config.h"
 #include "geometry/error.h"

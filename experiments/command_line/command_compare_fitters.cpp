@@ -1,7 +1,7 @@
 // `quadrix compare-fitters`: the fitter study (experiments/studies/fitter_study.h). Writes fitters.csv,
 // fitters.md and fitters.svg into --out. The committed report is produced from the repository root by
 //   build/bin/quadrix compare-fitters --out papers/studies
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/studies/fitter_study.h"
 #include "geometry/error.h"

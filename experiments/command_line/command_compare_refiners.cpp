@@ -2,7 +2,7 @@
 // refiners.md and refiners.svg into --out. The committed report is produced from the repository root by
 //   make study-refiners   (build/bin/quadrix compare-refiners --out papers/studies)
 #include "estimation/refiner.h"
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/studies/refiner_study.h"
 #include "geometry/error.h"

@@ -1,7 +1,7 @@
 // `quadrix fitter-segments`: segments cut from simulated scans with their true primitives
 // (experiments/synthetic/scan_segments.h), written as .npy for the learned fitter's training script:
 //   quadrix fitter-segments --seed 101 --scans 600 --object-scans 3000 --out /tmp/segments
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/synthetic/scan_segments.h"
 

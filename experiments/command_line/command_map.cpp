@@ -5,7 +5,7 @@
 // descriptor across them, loop edges from the registration pipeline, a pose graph. Writes
 // poses.tsv, edges.csv, report.json, map.ply, map_model.qsm and models/ into DIR (all or nothing).
 // With --gt also the ATE, RPE and the loop edges' precision and recall. Exit 2 on bad input.
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "estimation/mapping.h"
 #include "experiments/reports/map_page.h"
@@ -108,8 +108,7 @@ void run(const MapCommandOptions& options) {
   // The output folder is checked before the work and replaced at once after it, page included.
   std::vector<std::string> inputs = {options.scans, options.kitti, options.kitti_poses, options.kitti_calibration, options.truth};
   for (const ScanEntry& scan : list.scans) inputs.push_back(scan.path);
-  FolderReplacement output("--out", options.out,
-                           {"poses.tsv", "edges.csv", "report.json", "map.ply", "map_model.qsm", "models", "map.html"}, inputs);
+  FolderReplacement output("--out", options.out, map_folder_names(), inputs);
 
   const bool terminal = isatty(fileno(stderr)) != 0;
   const auto start = std::chrono::steady_clock::now();

@@ -7,7 +7,7 @@
 // interactive page model.html (quadrix view) unless --no-page. A static scan above the memory budget
 // (or with --tile-size) is modelled tile by tile (fitting/tiled_modelling.h); --tile i/n writes the
 // partial model of one group of tiles, which `model merge` joins.
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/command_line/terminal_text.h"
 #include "experiments/reports/interactive_page.h"

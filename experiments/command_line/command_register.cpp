@@ -11,7 +11,7 @@
 // (source_model.json, target_model.json) and the interactive page view.html (unless --no-page).
 // The exit status is 0 whenever a registration ran (its status says ok / ambiguous / degenerate /
 // failed); 2 on bad input (unreadable file, unknown preset or config key).
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/command_line/terminal_text.h"
 #include "estimation/registration_config.h"

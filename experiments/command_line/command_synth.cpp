@@ -3,7 +3,7 @@
 // `quadrix synth --list` names the scenes and sensors. `quadrix synth loop-closures` writes a
 // loop-closure benchmark set (loop_closure_set.h) instead of one scene's scans, and `quadrix synth drive`
 // a multi-session drive through a town with drifting odometry (town_drive.h), the mapping benchmark.
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/synthetic/loop_closure_set.h"
 #include "experiments/synthetic/synthetic_output.h"
@@ -156,10 +156,7 @@ void run_command(const SynthCommandOptions& options) {
   }
   output.binary = !options.ascii;
 
-  FolderReplacement folder("--out", options.out,
-                           {"scene.json", "primitives.json", "pairs.tsv", "point_counts.csv", "scan_*.ply", "scan_*.pcd",
-                            "pose_*.txt", "T_*_from_*.txt"},
-                           {options.poses});
+  FolderReplacement folder("--out", options.out, synthetic_folder_names(), {options.poses});
   const auto start = std::chrono::steady_clock::now();
   StreetOptions street;
   street.foliage = foliage_from_name(options.foliage, "--foliage");

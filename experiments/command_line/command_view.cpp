@@ -2,7 +2,7 @@
 // `quadrix register --out` folder (registration page), a `quadrix model` JSON file or a
 // `quadrix synth` folder (model pages), or the map page of a `quadrix map --out` folder (map_page.h). One self-contained HTML file: three.js from Debian's
 // libjs-three and the data are inlined, so it opens from disk without a network.
-#include "experiments/command_line/command_outputs.h"
+#include "geometry/output_paths.h"
 #include "experiments/command_line/command_registry.h"
 #include "experiments/reports/interactive_page.h"
 #include "experiments/reports/map_page.h"

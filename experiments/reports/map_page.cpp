@@ -299,6 +299,10 @@ std::string write_map_page(const std::string& folder) {
   return path;
 }
 
+std::vector<std::string> map_folder_names() {
+  return {"poses.tsv", "edges.csv", "report.json", "map.ply", "map_model.qsm", "models", "map.html"};
+}
+
 const char* const kMapPageScript = R"JS(
 (function () {
   'use strict';

@@ -70,4 +70,8 @@ MapPageInput read_map_folder(const std::string& folder, std::size_t point_budget
 /// Writes FOLDER/map.html (atomically) for a map folder; returns its path.
 std::string write_map_page(const std::string& folder);
 
+/// Every entry a map folder holds (write_map's files and models, and the page): what a folder
+/// replaced by a new map run may hold (FolderReplacement's own names).
+std::vector<std::string> map_folder_names();
+
 }  // namespace quadrix

@@ -381,4 +381,9 @@ std::vector<std::string> write_synthetic_folder(const std::string& directory, co
   return index.written;
 }
 
+std::vector<std::string> synthetic_folder_names() {
+  return {"scene.json", "primitives.json", "pairs.tsv", "point_counts.csv", "scan_*.ply", "scan_*.pcd",
+          "pose_*.txt", "T_*_from_*.txt"};
+}
+
 }  // namespace quadrix

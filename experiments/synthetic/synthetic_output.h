@@ -71,4 +71,8 @@ Eigen::Isometry3d relative_transform(const Eigen::Isometry3d& target_pose, const
 std::vector<std::string> write_synthetic_folder(const std::string& directory, const SyntheticRun& run,
                                                 const SyntheticOutputOptions& options = {});
 
+/// Every name write_synthetic_folder may write, as shell patterns: what a folder replaced by a new
+/// run may hold (FolderReplacement's own names).
+std::vector<std::string> synthetic_folder_names();
+
 }  // namespace quadrix

@@ -8,6 +8,7 @@
 #include "estimation/registration_config.h"
 #include "experiments/reports/map_page.h"
 #include "geometry/error.h"
+#include "geometry/output_paths.h"
 
 #include <pybind11/eval.h>
 #include <pybind11/stl.h>
@@ -343,10 +344,15 @@ def _map_register_task(from_entry, to_entry, kind, guess, from_model, to_model, 
           require_existing_file(path);
           truth = read_pose_table(path);
         }
-        std::string out_folder;
+        // The folder is checked before the work and replaced whole at the end, as `quadrix map --out`
+        // does: a failure midway leaves the earlier folder as it was.
+        std::optional<FolderReplacement> out_folder;
+        const std::string out_path = out.is_none() ? std::string() : path_from_object(out);
         if (!out.is_none()) {
-          out_folder = path_from_object(out);
-          require_writable_location(std::filesystem::absolute(out_folder).lexically_normal().string());
+          std::vector<std::string> inputs;
+          for (const ScanEntry& scan : list.scans) inputs.push_back(scan.path);
+          if (!gt.is_none()) inputs.push_back(path_from_object(gt));
+          out_folder.emplace("out", out_path, map_folder_names(), inputs);
         }
         auto run = std::make_shared<MapRun>();
         // With a client: the executor's futures (one model per scan) live here, released with the GIL held.
@@ -407,10 +413,11 @@ def _map_register_task(from_entry, to_entry, kind, guess, from_model, to_model, 
             run->evaluation = evaluate_map(run->result, truth, 30.0, options.minimum_loop_travel);
             run->evaluation_json = map_evaluation_json(*run->evaluation);
           }
-          if (!out_folder.empty()) {
-            write_map(out_folder, run->result, options, run->evaluation_json);
-            write_map_page(out_folder);
-            run->out = out_folder;
+          if (out_folder) {
+            write_map(out_folder->staging_folder(), run->result, options, run->evaluation_json);
+            write_map_page(out_folder->staging_folder());
+            out_folder->commit();
+            run->out = out_path;
           }
         }
         return run;

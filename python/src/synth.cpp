@@ -4,6 +4,7 @@
 
 #include "experiments/synthetic/synthetic_output.h"
 #include "geometry/error.h"
+#include "geometry/output_paths.h"
 
 #include <pybind11/stl.h>
 
@@ -42,7 +43,12 @@ void bind_synth(py::module_& module) {
         } else if (!poses.is_none()) {
           for (const py::handle pose : poses) sensor_poses.push_back(pose_from_object(pose, "poses[i]"));
         }
-        const std::string folder = out.is_none() ? std::string() : path_from_object(out);
+        // The folder is checked before the work and replaced whole once every file is written, as
+        // `quadrix synth --out` does: an error or a full disk midway leaves the earlier folder as it was.
+        std::optional<FolderReplacement> folder;
+        if (!out.is_none())
+          folder.emplace("out", path_from_object(out), synthetic_folder_names(),
+                         std::vector<std::string>{pose_spec.value_or(std::string())});
 
         SyntheticRun run;
         std::vector<std::string> files;
@@ -55,7 +61,10 @@ void bind_synth(py::module_& module) {
           if (pose_spec) sensor_poses = parse_pose_spec(*pose_spec);
           if (sensor_poses.empty() && !pose_spec) sensor_poses = default_sensor_poses(scene, sensor);
           run = run_synthetic(scene, sensor, sensor_poses, seed);
-          if (!folder.empty()) files = write_synthetic_folder(folder, run, output);
+          if (folder) {
+            files = write_synthetic_folder(folder->staging_folder(), run, output);
+            folder->commit();
+          }
           if (primitives) primitives_text = primitives_json(run.scene, output.record_samples);
         }
 

@@ -73,6 +73,16 @@ def test_bad_input_names_the_entry(walk):
         quadrix.map(rows, candidates_per_scan=-1)
 
 
+def test_a_foreign_out_folder_is_refused_before_the_work(walk, tmp_path):
+    rows, _, _ = walk
+    foreign = tmp_path / "notes"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("not ours")
+    with pytest.raises(ValueError, match="notes.txt"):
+        quadrix.map(rows, foreign)
+    assert [p.name for p in foreign.iterdir()] == ["notes.txt"]
+
+
 def test_dask_local_cluster_and_the_command_give_the_same_map(walk, tmp_path):
     pytest.importorskip("distributed")
     _, scans, _ = walk

@@ -62,3 +62,19 @@ def test_porous_foliage_matches_the_cli_and_adds_vegetation(tmp_path, quadrix_cl
         quadrix.synth("corridor", foliage="porous")
     with pytest.raises(ValueError, match="solid or porous"):
         quadrix.synth("street", foliage="leafy")
+
+
+def test_out_folder_is_replaced_whole_and_a_foreign_one_is_refused(tmp_path):
+    out = tmp_path / "py"
+    quadrix.synth("corridor", seed=2, sensor="vlp16", primitives=False, out=out, poses="0,0,0,0;2,0,0,0;4,0,0,0")
+    assert (out / "scan_002.ply").exists()
+    # A second run writing two scans replaces the folder whole: no third scan of the first run stays.
+    quadrix.synth("corridor", seed=2, sensor="vlp16", primitives=False, out=out)
+    assert (out / "scan_001.ply").exists() and not (out / "scan_002.ply").exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["py"], "no staging folder is left beside it"
+    foreign = tmp_path / "thesis"
+    foreign.mkdir()
+    (foreign / "thesis.tex").write_text("not ours")
+    with pytest.raises(ValueError, match="thesis.tex"):
+        quadrix.synth("corridor", seed=2, sensor="vlp16", primitives=False, out=foreign)
+    assert (foreign / "thesis.tex").read_text() == "not ours"

@@ -1,4 +1,4 @@
-// Outputs of a `quadrix` command, checked before the work: every path a command will write is a
+// Outputs of a command or API call, checked before the work: every path a command will write is a
 // regular file or nothing, in a writable folder that is not a system one, none is one of the
 // command's inputs or another of its outputs; a folder the command fills is replaced all at once.
 #pragma once
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace quadrix::cli {
+namespace quadrix {
 
 /// One file a command will write: the option naming it (for messages) and its path ("" : none).
 struct PlannedOutput {
@@ -78,4 +78,4 @@ class FolderReplacement {
 /// positions are float32 and 1e39 or 1e308 - x is no longer a number there.
 void require_finite_points(const PointCloud& cloud, const std::string& what);
 
-}  // namespace quadrix::cli
+}  // namespace quadrix

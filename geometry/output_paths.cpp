@@ -1,5 +1,5 @@
-// Output checks and whole-folder replacement of `quadrix` commands (see command_outputs.h).
-#include "experiments/command_line/command_outputs.h"
+// Output checks and whole-folder replacement (see output_paths.h).
+#include "geometry/output_paths.h"
 
 #include "geometry/error.h"
 
@@ -19,7 +19,7 @@
 #include <unistd.h>
 #include <utility>
 
-namespace quadrix::cli {
+namespace quadrix {
 namespace {
 
 namespace fs = std::filesystem;
@@ -267,4 +267,4 @@ void require_finite_points(const PointCloud& cloud, const std::string& what) {
                   " is no longer finite (a coordinate beyond float range); check the origin or pose given");
 }
 
-}  // namespace quadrix::cli
+}  // namespace quadrix
