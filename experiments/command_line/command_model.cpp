@@ -415,7 +415,7 @@ std::string write_model_page(const ModelCommandOptions& options, const PresetCho
 void print_model_summary(const ModelCommandOptions& options, const PresetChoice& preset, const ModellingOptions& modelling, const ModellingResult& result,
                          const PointCloud& cloud, const std::map<std::pair<std::string, std::string>, int>& quadric_counts,
                          std::map<std::string, int> element_counts, std::size_t binary_size, double raw_bytes,
-                         const std::string& page_path) {
+                         const std::string& page_path, const std::string& length_unit) {
   const SceneModel& model = result.model;
   std::printf("quadrix model %s%s  (%zu points, %zu in range, %zu of them isolated and left out, fitter %s)\n",
               options.inputs.front().c_str(),
@@ -448,8 +448,8 @@ void print_model_summary(const ModelCommandOptions& options, const PresetChoice&
     std::printf(" vs raw cloud %s (%.0fx smaller)", human_bytes(raw_bytes).c_str(), raw_bytes / static_cast<double>(binary_size));
   std::printf("\nground: %s", model.has_ground ? "found" : "not found");
   if (model.has_ground)
-    std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f m", model.ground_normal.x(), model.ground_normal.y(),
-                model.ground_normal.z(), model.ground_offset);
+    std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f %s", model.ground_normal.x(), model.ground_normal.y(),
+                model.ground_normal.z(), model.ground_offset, length_unit.c_str());
   std::printf("\nwrote %s", options.out.c_str());
   const std::initializer_list<const std::string*> written = {&options.binary, &options.mesh, &options.elements, &options.picture,
                                                              &page_path};
@@ -794,7 +794,7 @@ void run(const ModelCommandOptions& options) {
   const std::string page_path =
       write_model_page(options, preset, modelling, result, cloud.local_origin.isZero(0.0) ? cloud : page_cloud, points);
   print_model_summary(options, preset, modelling, result, cloud, quadric_counts, element_counts, binary_bytes.size(), raw_bytes,
-                      page_path);
+                      page_path, rescaled ? units.name : "m");
   if (rescaled)
     std::printf("units: the file is in %s (%.10g m, declared by its %s): modelled in metres, written in %s\n", units.name.c_str(),
                 units.metres_per_unit, units.source.c_str(), units.name.c_str());
