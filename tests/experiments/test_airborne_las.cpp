@@ -292,6 +292,23 @@ TEST(AirborneLas, GeographicCoordinatesAreRefused) {
   EXPECT_FALSE(std::filesystem::exists(folder.file("m.json")));
 }
 
+// A file in feet is modelled whole in metres: tiles (whose sizes, margins and merge rules are in
+// metres of the file) are refused with the reason rather than run in the wrong unit.
+TEST(AirborneLas, FeetAreNotModelledTileByTile) {
+  const Folder folder("quadrix_airborne_tiles");
+  write_feet_las(folder.file("scene.las"), nadir_scan(synthetic_roofs(), 0.2, 0.05, 7));
+  const std::string command = std::string(QUADRIX_EXECUTABLE) + " model '" + folder.file("scene.las") +
+                              "' --no-page --preset airborne --tile-size 50 --out '" + folder.file("m.json") + "' > '" +
+                              folder.file("log.txt") + "' 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream log_file(folder.file("log.txt"));
+  const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+  EXPECT_NE(text.find("foot"), std::string::npos) << text;
+  EXPECT_NE(text.find("tile by tile"), std::string::npos) << text;
+  EXPECT_FALSE(std::filesystem::exists(folder.file("m.json")));
+}
+
 // The real airborne tile (Autzen, state-plane feet, classes 1 and 2) has no primitive truth. What is
 // checked, each from a rule rather than from this tile's numbers:
 // - the model is in the file's coordinates: every centre inside the header's bounds (feet);
