@@ -18,11 +18,11 @@
 
 namespace quadrix {
 
-/// Names accepted by registration_preset: vlp64, vlp16, mid360, avia, monument.
+/// Names accepted by registration_preset: vlp64, vlp16, mid360, avia, monument, airborne.
 std::vector<std::string> registration_preset_names();
 
 /// The paper's defaults plus what the preset `name` changes: its sensor's extraction
-/// (extraction_preset) on both sides and its registration fields (only monument has one: the
+/// (extraction_preset) on both sides and its registration fields (monument and airborne have them: the
 /// constrained fitter). Throws quadrix::Error listing the valid names otherwise.
 RegistrationOptions registration_preset(const std::string& name);
 
@@ -126,7 +126,9 @@ struct SensorGuess {
   double minimum_range = 0.0;         ///< crop radius auto sets, m: 2 m when near_field_fraction > 10% (self-hits), else the preset's
 };
 
-/// Chooses among the presets by the cloud itself: narrow horizontal field of view (< 50% azimuth
+/// Chooses among the presets by the cloud itself: a cloud that covers its x-y extent evenly and is
+/// flat against it (a nadir view; thresholds beside the rule, docs/registration.md) -> airborne;
+/// narrow horizontal field of view (< 50% azimuth
 /// coverage) -> avia; more than 1.5 M points -> monument (static scan); an elevation span (1st..99th
 /// percentile beyond 10 m) under 35 deg is a spinning multi-beam scanner -> vlp64 when dense (>= 60 k
 /// points or >= 48 rings), else vlp16; a taller span -> mid360. Angles are measured in the cloud's

@@ -29,7 +29,7 @@ std::string extraction_status_name(ExtractionStatus status) {
   return "unknown";
 }
 
-std::vector<std::string> extraction_preset_names() { return {"vlp64", "vlp16", "mid360", "avia", "monument"}; }
+std::vector<std::string> extraction_preset_names() { return {"vlp64", "vlp16", "mid360", "avia", "monument", "airborne"}; }
 
 ExtractionOptions extraction_preset(const std::string& name) {
   ExtractionOptions options;  // HDL-64E values (range 2-80 m, voxel 1.0 m, merge 0.20 m, cos 0.95, ratio 30, 20 pts)
@@ -81,6 +81,33 @@ ExtractionOptions extraction_preset(const std::string& name) {
     options.shapes.epsilon = 0.05;
     options.shapes.cluster_epsilon = 0.6;
     options.shapes.minimum_points = 60;
+    return options;
+  }
+  if (name == "airborne") {
+    // Nadir airborne laser scans at 0.5-2 points/m^2 (the USGS Lidar Base Specification's quality
+    // level 2, at least 2 points/m^2 with RMSEz <= 10 cm, and sparser legacy flights): roofs and the
+    // ground seen from above. The values follow from that spacing (0.7-1.4 m) and accuracy, not from
+    // a tuned data set. No sensor position: no range limits.
+    options.static_scan = true;
+    options.minimum_range = 0.0;
+    options.maximum_range = 0.0;
+    options.ground_class = 2;  // ASPRS class 2 (ground), where the file classifies its points
+    // A lone return (bird, multipath) has no other point in its 7.5 m block of cells; a surface at
+    // 0.5 points/m^2 puts about 28 there.
+    options.isolation_cell = 2.5;
+    // A 0.5 m grid, finer than the spacing, keeps nearly every surface point and thins only where
+    // flight strips overlap.
+    options.shapes.simplification_voxel = 0.5;
+    options.shapes.normal_neighbours = 12;  // about 2 m around a point at 1 point/m^2: inside one roof facet
+    options.shapes.epsilon = 0.2;           // twice the 10 cm RMSEz of quality level 2
+    options.shapes.cluster_epsilon = 2.5;   // 1.8 times the 1.4 m spacing at 0.5 points/m^2: a facet's points connect, roofs across a lane do not
+    options.shapes.minimum_points = 40;     // a 20 m^2 facet at 2 points/m^2, 80 m^2 at 0.5
+    // Seen from above, walls and columns get almost no points and a curved roof of 10 m gets a few
+    // dozen, too few to tell a sphere or cone from facets, while tree crowns offer curved
+    // candidates everywhere: planes only.
+    options.shapes.detect_cylinders = false;
+    options.shapes.detect_spheres = false;
+    options.shapes.detect_cones = false;
     return options;
   }
   std::string valid;
@@ -271,9 +298,56 @@ ExtractionResult extract_static_scan(const Eigen::Matrix3Xd& points, const Point
       normals.col(static_cast<Eigen::Index>(i)) =
           Eigen::Vector3d(nx->second[in_range[i]], ny->second[in_range[i]], nz->second[in_range[i]]);
   }
-  ExtractionResult shapes = detect_shapes_with_parameters(detail::gather_points(points, in_range), normals, options, shape_parameters);
+  // The file's own ground classification, where it has one (ExtractionOptions::ground_class).
+  std::vector<std::uint32_t> classified_ground, others;
+  if (options.ground_class >= 0 && cloud.labels.size() == cloud.size())
+    for (const std::uint32_t index : in_range)
+      (cloud.labels[index] == static_cast<std::uint32_t>(options.ground_class) ? classified_ground : others).push_back(index);
+  const bool ground_from_classes = classified_ground.size() >= 3 && !others.empty() &&
+                                   classified_ground.size() >= static_cast<std::size_t>(options.shapes.minimum_points);
+  if (!ground_from_classes) {
+    ExtractionResult shapes = detect_shapes_with_parameters(detail::gather_points(points, in_range), normals, options, shape_parameters);
+    for (Element& element : shapes.elements)
+      for (std::uint32_t& index : element.point_indices) index = in_range[index];
+    shapes.points_in_range = in_range.size();
+    if (shapes.has_ground) shapes.ground_source = "geometry";
+    return shapes;
+  }
+  // Shapes among the other points; the classified points are the ground, its plane their PCA plane.
+  Eigen::Matrix3Xd other_normals;
+  if (normals.cols() > 0) {
+    other_normals.resize(3, static_cast<Eigen::Index>(others.size()));
+    for (std::size_t i = 0, j = 0; i < in_range.size(); ++i)
+      if (cloud.labels[in_range[i]] != static_cast<std::uint32_t>(options.ground_class))
+        other_normals.col(static_cast<Eigen::Index>(j++)) = normals.col(static_cast<Eigen::Index>(i));
+  }
+  ExtractionOptions without_ground = options;
+  without_ground.shapes.mark_ground = false;
+  std::vector<ShapeParameters> other_parameters;
+  ExtractionResult shapes = detect_shapes_with_parameters(detail::gather_points(points, others), other_normals, without_ground,
+                                                          shape_parameters != nullptr ? &other_parameters : nullptr);
   for (Element& element : shapes.elements)
-    for (std::uint32_t& index : element.point_indices) index = in_range[index];
+    for (std::uint32_t& index : element.point_indices) index = others[index];
+  Moments moments;
+  for (const std::uint32_t index : classified_ground) moments.add(points.col(index));
+  const Eigen::Vector3d up = options.up.normalized();
+  Eigen::Vector3d normal = principal_axes(moments.covariance()).vectors.col(0);
+  if (normal.dot(up) < 0.0) normal = -normal;
+  Element ground;
+  ground.element_class = ElementClass::Ground;
+  ground.detected_type = QuadricType::Plane;
+  ground.point_indices = std::move(classified_ground);
+  shapes.elements.insert(shapes.elements.begin(), std::move(ground));
+  if (shape_parameters != nullptr) {
+    shape_parameters->push_back({normal, moments.mean(), 0.0});
+    shape_parameters->insert(shape_parameters->end(), other_parameters.begin(), other_parameters.end());
+  }
+  shapes.has_ground = true;
+  shapes.ground_normal = normal;
+  shapes.ground_offset = -normal.dot(moments.mean());
+  shapes.ground_source = "classification";
+  shapes.status = ExtractionStatus::Ok;  // the ground alone is a model: no shape among the rest is not a failure
+  shapes.message.clear();
   shapes.points_in_range = in_range.size();
   return shapes;
 }

@@ -1,7 +1,7 @@
 // Element extraction (paper §"Quadric Extraction"): a point cloud is reduced to key elements —
 // the ground E_g, planes E_p, lines E_l and object clusters E_o — each a subset of points with a
 // semantic class. LiDAR scans use ground segmentation, voxel planes, clustering and RANSAC lines;
-// static scans (monument preset) use CGAL Efficient RANSAC shape detection.
+// static scans (monument and airborne presets) use CGAL Efficient RANSAC shape detection.
 #pragma once
 
 #include "fitting/scene_model.h"
@@ -194,6 +194,7 @@ struct ExtractionOptions {
   bool static_scan = false;            ///< true: CGAL Efficient RANSAC shapes instead of the LiDAR pipeline
   double minimum_range = 2.0;          ///< points nearer the sensor are dropped (ego vehicle), m
   double maximum_range = 80.0;         ///< points farther away are dropped, m (0: unlimited)
+  int ground_class = -1;               ///< static scans: points whose label (a LAS file's ASPRS classification, PointCloud::labels) is this class are the Ground element, the shapes are detected among the others; without such points the ground is the lowest large horizontal plane (-1: always that; airborne preset: 2, ASPRS ground)
   double isolation_cell = 0.3;         ///< points in range with no other point in their cube of this edge or the 26 around are left out before modelling (spurious returns), m (0: every point kept)
   int isolation_neighbours = 1;        ///< ... or with fewer than this many other points there
   Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();  ///< scanner position (ranges, patch centre, normal orientation)
@@ -212,7 +213,8 @@ struct ExtractionOptions {
 std::vector<ElementClass> parse_label_classes(const std::string& names);
 
 /// Presets from the released configs (REFERENCE.md "Extraction parameters per sensor"):
-/// vlp64 (HDL-64E), vlp16, mid360, avia, monument (static TLS scan, CGAL shapes). Throws
+/// vlp64 (HDL-64E), vlp16, mid360, avia, monument (static TLS scan, CGAL shapes), airborne
+/// (nadir airborne laser scan, 0.5-2 points/m^2: roofs and ground, CGAL planes). Throws
 /// quadrix::Error naming the valid presets otherwise.
 ExtractionOptions extraction_preset(const std::string& name);
 /// Names accepted by extraction_preset, in listing order.
@@ -258,6 +260,7 @@ struct ExtractionResult {
   bool has_ground = false;                         ///< whether a ground was found
   Eigen::Vector3d ground_normal = Eigen::Vector3d::UnitZ();  ///< unit normal of the ground, pointing up
   double ground_offset = 0.0;                      ///< ground plane normal . x + offset = 0
+  std::string ground_source;                       ///< static scans: "classification" (ExtractionOptions::ground_class), "geometry" (lowest large horizontal plane) or "" (no ground)
   std::size_t points_in_range = 0;                 ///< points kept by the range limits
   std::size_t isolated_points = 0;                 ///< of those, points left out as isolated (ExtractionOptions::isolation_cell)
   MeasuredPoints measured;                         ///< the points in range that keep company, which the extraction worked on

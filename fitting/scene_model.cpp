@@ -94,6 +94,20 @@ SceneModel translated(SceneModel model, const Eigen::Vector3d& offset) {
   return model;
 }
 
+SceneModel scaled(SceneModel model, double factor) {
+  if (!(factor > 0.0) || !std::isfinite(factor)) throw Error("scaled: the factor must be finite and positive");
+  // x' = S x with S = diag(f, f, f, 1): x'^T (S^-T Q S^-1) x' = x^T Q x.
+  const Eigen::Vector4d inverse(1.0 / factor, 1.0 / factor, 1.0 / factor, 1.0);
+  for (QuadricRecord& record : model.records) {
+    const Eigen::Matrix4d matrix = inverse.asDiagonal() * record.quadric().matrix() * inverse.asDiagonal();
+    record.q = Quadric(matrix).normalized().parameters();
+    record.full_center *= factor;
+    record.full_scale *= factor;
+  }
+  if (model.has_ground) model.ground_offset *= factor;
+  return model;
+}
+
 void validate_scene_model(const SceneModel& model) {
   const std::size_t count = model.records.size();
   if (model.types.size() != count)

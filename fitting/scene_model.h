@@ -80,6 +80,14 @@ void validate_scene_model(const SceneModel& model);
 /// file's frame. Types, classes, scales, rotations and descriptors are unchanged.
 SceneModel translated(SceneModel model, const Eigen::Vector3d& offset);
 
+/// The model with every length multiplied by `factor` (> 0) about the origin, x' = factor x: each
+/// record's quadric (Q' = S^-T Q S^-1 with S = diag(factor, factor, factor, 1), renormalised),
+/// full centre and full scale, and the ground plane (offset' = factor offset). Puts a model made in
+/// metres back into a file's own length unit (factor = 1 / metres per unit: LAS files in feet).
+/// Types, classes, rotations and descriptors (FPFH histograms, unitless) are unchanged. Throws
+/// quadrix::Error for a factor that is not finite and positive.
+SceneModel scaled(SceneModel model, double factor);
+
 /// Binary scene-model format, version 1 (all little-endian, IEEE-754):
 ///   magic "QDXSCENE" (8 bytes), u32 version = 1,
 ///   u64 record count N, u64 augmented_begin, u64 source_point_count,

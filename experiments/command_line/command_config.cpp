@@ -41,6 +41,7 @@ void run(const ConfigCommandOptions& options) {
   if (!options.config.empty()) apply_registration_config(options.config, registration);
   if (auto_without_cloud) {
     std::printf("# quadrix config: preset auto (the default of register, model and Python) chooses per cloud:\n"
+                "#   x-y extent covered evenly (>= 55%% of cells) and flat (z span <= 0.35 of it) -> airborne;\n"
                 "#   narrow azimuth coverage (< 50%%) -> avia; more than 1.5 M points -> monument;\n"
                 "#   elevation span < 35 deg -> vlp64 (>= 60 k points or >= 48 rings) or vlp16; else mid360;\n"
                 "#   it also levels the extraction on the measured up axis and crops a platform's own body.\n"

@@ -19,6 +19,7 @@
 #include "fitting/tiled_modelling.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "geometry/las.h"
 #include "geometry/mesh.h"
 
 #include <nlohmann/json.hpp>
@@ -197,6 +198,67 @@ std::string human_bytes(double bytes) {
   return buffer;
 }
 
+// The length unit of the inputs' coordinates. A LAS file's CRS records may declare one
+// (LasHeader::units: feet in most US state-plane surveys); every other file, and a LAS file that
+// declares none, is taken to be in metres, the unit every preset's lengths are in.
+struct InputUnits {
+  double metres_per_unit = 1.0;  // 1: metres, declared or assumed
+  std::string name = "metre";    // as the file declares it ("foot", "US survey foot", ...)
+  std::string source;            // "LAS GeoTIFF keys", "LAS WKT", or "" (nothing declared: metres assumed)
+  bool all_las = false;          // every input is LAS, so its labels are ASPRS classes
+};
+
+InputUnits input_units(const ModelCommandOptions& options, CloudFormat format) {
+  InputUnits units;
+  units.all_las = true;
+  for (std::size_t i = 0; i < options.inputs.size(); ++i) {
+    const std::string& path = options.inputs[i];
+    bool las = format == CloudFormat::Las;
+    if (format == CloudFormat::Auto) {
+      try {
+        las = cloud_format_from_path(path) == CloudFormat::Las;
+      } catch (const Error&) {
+        las = false;  // the read names the unknown extension
+      }
+    }
+    units.all_las = units.all_las && las;
+    InputUnits found;
+    if (las && std::filesystem::is_regular_file(path)) {
+      const LasUnits declared = read_las_header(path).units;
+      if (declared.geographic)
+        throw file_error(path, "its coordinates are longitude and latitude in degrees (a geographic CRS); quadrix models "
+                               "lengths: reproject it to a projected CRS first (e.g. pdal translate with filters.reprojection)");
+      if (declared.horizontal_metres > 0.0) {
+        found.metres_per_unit = declared.horizontal_metres;
+        found.name = declared.horizontal_name;
+        found.source = "LAS " + declared.source;
+      }
+      if (declared.vertical_metres > 0.0 && std::abs(declared.vertical_metres - found.metres_per_unit) > 1e-9 * found.metres_per_unit)
+        throw file_error(path, "its CRS declares x and y in " + found.name + " but z in " + declared.vertical_name +
+                               ": mixed units are not modelled (convert z to the x and y unit first)");
+    }
+    if (i > 0 && std::abs(found.metres_per_unit - units.metres_per_unit) > 1e-9 * units.metres_per_unit)
+      throw file_error(path, "its coordinates are in " + found.name + ", those of " + options.inputs.front() + " in " +
+                             units.name + ": inputs merged into one cloud need one unit");
+    if (i == 0) {
+      const bool all_las = units.all_las;
+      units = found;
+      units.all_las = all_las;
+    }
+  }
+  return units;
+}
+
+// The "units" member of the model JSON: what the file declared and that the model is written in it.
+std::string units_json(const InputUnits& units) {
+  return "\"units\": " + nlohmann::json{{"name", units.name},
+                                       {"metres_per_unit", units.metres_per_unit},
+                                       {"declared_by", units.source.empty() ? "nothing (metres assumed)" : units.source},
+                                       {"modelled_in", "metre"},
+                                       {"written_in", units.name}}
+                              .dump();
+}
+
 // One input as read, or several moved into the world frame by their poses and concatenated
 // (labels and extra fields are kept only when every input has them).
 PointCloud read_merged_clouds(const ModelCommandOptions& options, const CloudReadOptions& read_options) {
@@ -353,7 +415,7 @@ std::string write_model_page(const ModelCommandOptions& options, const PresetCho
 void print_model_summary(const ModelCommandOptions& options, const PresetChoice& preset, const ModellingOptions& modelling, const ModellingResult& result,
                          const PointCloud& cloud, const std::map<std::pair<std::string, std::string>, int>& quadric_counts,
                          std::map<std::string, int> element_counts, std::size_t binary_size, double raw_bytes,
-                         const std::string& page_path) {
+                         const std::string& page_path, const std::string& length_unit) {
   const SceneModel& model = result.model;
   std::printf("quadrix model %s%s  (%zu points, %zu in range, %zu of them isolated and left out, fitter %s)\n",
               options.inputs.front().c_str(),
@@ -386,8 +448,8 @@ void print_model_summary(const ModelCommandOptions& options, const PresetChoice&
     std::printf(" vs raw cloud %s (%.0fx smaller)", human_bytes(raw_bytes).c_str(), raw_bytes / static_cast<double>(binary_size));
   std::printf("\nground: %s", model.has_ground ? "found" : "not found");
   if (model.has_ground)
-    std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f m", model.ground_normal.x(), model.ground_normal.y(),
-                model.ground_normal.z(), model.ground_offset);
+    std::printf(", normal (%.4f, %.4f, %.4f), offset %.3f %s", model.ground_normal.x(), model.ground_normal.y(),
+                model.ground_normal.z(), model.ground_offset, length_unit.c_str());
   std::printf("\nwrote %s", options.out.c_str());
   const std::initializer_list<const std::string*> written = {&options.binary, &options.mesh, &options.elements, &options.picture,
                                                              &page_path};
@@ -625,11 +687,21 @@ void run(const ModelCommandOptions& options) {
   if (options.inputs.size() == 1 && options.poses.empty()) read_options.local_origin = LocalOrigin::Auto;
   if (centred && (options.inputs.size() != 1 || !options.poses.empty()))
     throw Error("--sensor-origin: takes one input without --poses (stations merged by pose are modelled in the world frame)");
+  // Coordinates in another unit (a LAS file in feet) are modelled in metres, the presets' unit, and
+  // the model is written back in the file's unit.
+  const InputUnits units = input_units(options, read_options.format);
+  const bool rescaled = units.metres_per_unit != 1.0;
+  const auto refuse_tiles_in_other_units = [&] {
+    if (rescaled)
+      throw Error(options.inputs.front() + ": coordinates in " + units.name +
+                  " are modelled whole (in metres), not tile by tile; raise --memory-budget and leave out --tile-size and --tile");
+  };
   {
     // A static scan tiled from its files: never read whole.
     RegistrationOptions registration;
     std::string notes;
     if (const std::unique_ptr<FileChunkSource> files = streamed_static_scan(options, tiling, registration, notes)) {
+      refuse_tiles_in_other_units();
       ExtractionOptions extraction = registration.source_extraction;
       if (options.plane_method == "cgal") extraction.planes.method = PlaneMethod::CgalRegionGrowing;
       ModellingOptions modelling = registration.modelling;
@@ -647,7 +719,13 @@ void run(const ModelCommandOptions& options) {
   // heights from the origin), and the model is moved back: every output is in the file's frame.
   const PointCloud centred_cloud = centred ? centred_on_sensor(cloud, sensor_origin) : PointCloud();
   if (centred) require_finite_points(centred_cloud, "--sensor-origin moved " + options.inputs.front());
-  const PointCloud& modelled = centred ? centred_cloud : cloud;
+  const PointCloud& file_units = centred ? centred_cloud : cloud;
+  PointCloud metric_cloud;
+  if (rescaled) {
+    metric_cloud = file_units;
+    metric_cloud.positions *= static_cast<float>(units.metres_per_unit);
+  }
+  const PointCloud& modelled = rescaled ? metric_cloud : file_units;
   // The library's preset resolution (as `register` and Python's model() do it): a named preset, or
   // auto measured on the cloud (its up axis and platform crop set on the extraction), then --config.
   std::string notes;
@@ -658,6 +736,7 @@ void run(const ModelCommandOptions& options) {
   ModellingOptions modelling = registration.modelling;
   if (!options.fitter.empty()) modelling.fitter = options.fitter;
   make_quadric_fitter(modelling.fitter);
+  if (!units.all_las) extraction.ground_class = -1;  // only a LAS file's labels are ASPRS classes
   const PresetChoice preset{options.preset, extraction.preset, notes};
   if (!extraction.static_scan && (options.tile_size > 0.0 || !options.tile.empty()))
     throw Error("--tile-size, --tile: tile-by-tile modelling is for static scans (--preset monument), not preset '" +
@@ -666,6 +745,7 @@ void run(const ModelCommandOptions& options) {
     // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
     modelling.quadrics_per_class = std::numeric_limits<int>::max();
     if (options.tile_size > 0.0 || !options.tile.empty() || tiling_needed(cloud.size(), tiling)) {
+      refuse_tiles_in_other_units();
       // Served in the file's frame (the cloud was read relative to its local origin).
       MatrixChunkSource points(cloud.positions, input_name(options), cloud.local_origin);
       run_tiled(options, extraction, modelling, points, sensor_origin, tiling);
@@ -681,6 +761,7 @@ void run(const ModelCommandOptions& options) {
   std::vector<std::uint32_t> score_labels;
   if (!options.score_labels.empty()) score_labels = read_semantic_kitti_labels(options.score_labels, cloud.size());
   ModellingResult result = model_scene(modelled, extraction, modelling, labels);
+  if (rescaled) result.model = scaled(std::move(result.model), 1.0 / units.metres_per_unit);
   if (centred) result.model = translated(std::move(result.model), sensor_origin);
   else if (!cloud.local_origin.isZero(0.0)) result.model = translated(std::move(result.model), cloud.local_origin);
   const SceneModel& model = result.model;
@@ -698,7 +779,9 @@ void run(const ModelCommandOptions& options) {
   for (const std::string& input : options.inputs)
     if (std::filesystem::exists(input)) raw_bytes += static_cast<double>(std::filesystem::file_size(input));
 
-  write_scene_model_json(options.out, model, model_json_extra(options, preset, modelling, result, raw_bytes, element_counts, scores));
+  write_scene_model_json(options.out, model,
+                         model_json_extra(options, preset, modelling, result, raw_bytes, element_counts, scores) + ", " +
+                             units_json(units) + ", \"ground_source\": " + nlohmann::json(result.extraction.ground_source).dump());
   if (!options.binary.empty()) write_scene_model_binary(options.binary, model);
   const Eigen::Matrix3Xd points = cloud.positions.cast<double>().colwise() + cloud.local_origin;  // the file's frame
   write_mesh_outputs(options, result, points);
@@ -711,7 +794,15 @@ void run(const ModelCommandOptions& options) {
   const std::string page_path =
       write_model_page(options, preset, modelling, result, cloud.local_origin.isZero(0.0) ? cloud : page_cloud, points);
   print_model_summary(options, preset, modelling, result, cloud, quadric_counts, element_counts, binary_bytes.size(), raw_bytes,
-                      page_path);
+                      page_path, rescaled ? units.name : "m");
+  if (rescaled)
+    std::printf("units: the file is in %s (%.10g m, declared by its %s): modelled in metres, written in %s\n", units.name.c_str(),
+                units.metres_per_unit, units.source.c_str(), units.name.c_str());
+  if (!result.extraction.ground_source.empty())
+    std::printf("ground from: %s\n", (result.extraction.ground_source == "classification"
+                                          ? "the file's classification (class " + std::to_string(extraction.ground_class) + ")"
+                                          : std::string("the lowest large horizontal plane"))
+                                             .c_str());
   if (scores) print_class_scores(*scores);
 }
 

@@ -1,9 +1,10 @@
 // Georeferenced clouds through `quadrix model`: a scan moved to UTM-sized coordinates and modelled
 // with --sensor-origin gives the model of the unmoved scan (float32 before centring used to cost
-// 0.25-0.5 m there), and the real LAS tile is modelled in the file's own coordinates.
+// 0.25-0.5 m there), and the real LAS tile is modelled in the file's own coordinates and units.
 #include "estimation/registration.h"
 #include "geometry/io.h"
 #include "geometry/las.h"
+#include "tests/geometry/las_test_writer.h"
 #include "test_data.h"
 
 #include <gtest/gtest.h>
@@ -107,25 +108,39 @@ TEST(ModelCommand, GeoreferencedScanWithSensorOriginModelsAsTheUnmovedScan) {
 }
 
 // The real airborne LAS tile (state-plane feet, ~6e5 and ~8e5): modelled relative to a local origin
-// and written in the file's coordinates. The same points given near the origin (the floats the
-// reader stored) give the same model, moved by that origin. No preset models an airborne tile yet:
-// the monument preset's isolated-point rule leaves out 109,544 of its 110,000 points, so today
-// both models are empty and this checks the command reads the tile and agrees with itself.
+// (in metres, as its CRS declares feet) and written in the file's coordinates. The same points,
+// classes and units given near the origin (the floats the reader stored, as a LAS in feet without
+// an offset) give the same model, moved by that origin.
 TEST(ModelCommand, LasTileIsModelledInTheFilesOwnCoordinates) {
   QUADRIX_REQUIRE_SHARED_DATA("als_autzen/autzen_trim.las");
   const Folder folder("quadrix_local_origin_las");
   const std::string las = testing::shared_data_path("als_autzen/autzen_trim.las");
   CloudReadOptions options;
   options.local_origin = LocalOrigin::Auto;
-  PointCloud local = read_point_cloud(las, options);
+  const PointCloud local = read_point_cloud(las, options);
   const Eigen::Vector3d origin = local.local_origin;
   ASSERT_GT(origin.head<2>().cwiseAbs().minCoeff(), 1e5);
-  local.local_origin.setZero();
-  local.extra_fields.clear();
-  write_point_cloud(folder.file("local.ply"), local);
-  const nlohmann::json file_frame = run_model(folder, las, "--preset monument", "las");
-  const nlohmann::json near_origin = run_model(folder, folder.file("local.ply"), "--preset monument", "local");
+  testing::LasTestFile near_origin_file;
+  near_origin_file.point_format = 1;
+  // GeoTIFF keys: projected CRS (GTModelType 1), x, y and z in feet (ProjLinearUnits, VerticalUnits 9002).
+  const std::vector<std::uint16_t> words = {1, 1, 0, 3, 1024, 0, 1, 1, 3076, 0, 1, 9002, 4099, 0, 1, 9002};
+  testing::LasTestVlr feet;
+  feet.record_id = 34735;
+  feet.payload.assign(reinterpret_cast<const char*>(words.data()), 2 * words.size());
+  near_origin_file.vlrs = {feet};
+  for (std::size_t i = 0; i < local.size(); ++i) {
+    testing::LasTestPoint point;  // the tile's 0.01 ft steps, exact in float32 at these magnitudes
+    point.X = static_cast<std::int32_t>(std::lround(local.positions(0, static_cast<Eigen::Index>(i)) * 100.0));
+    point.Y = static_cast<std::int32_t>(std::lround(local.positions(1, static_cast<Eigen::Index>(i)) * 100.0));
+    point.Z = static_cast<std::int32_t>(std::lround(local.positions(2, static_cast<Eigen::Index>(i)) * 100.0));
+    point.classification = static_cast<std::uint8_t>(local.labels[i]);
+    near_origin_file.points.push_back(point);
+  }
+  testing::write_bytes(folder.file("local.las"), testing::las_test_bytes(near_origin_file));
+  const nlohmann::json file_frame = run_model(folder, las, "--preset airborne", "las");
+  const nlohmann::json near_origin = run_model(folder, folder.file("local.las"), "--preset airborne", "local");
   ASSERT_TRUE(file_frame["quadrics"].is_array());
+  EXPECT_GT(file_frame["quadrics"].size(), 10u);
   EXPECT_EQ(counts(file_frame), counts(near_origin));
   ASSERT_EQ(file_frame["quadrics"].size(), near_origin["quadrics"].size());
   const LasHeader header = read_las_header(las);
