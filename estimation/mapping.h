@@ -129,7 +129,7 @@ struct MapResult {
   std::vector<SceneModel> models;              ///< each scan's model (sensor frame)
   std::vector<std::string> presets;            ///< the preset each scan was modelled with
   PoseGraphSummary graph;                      ///< the optimisation
-  std::map<std::string, double> timings_ms;    ///< "loading_and_modelling", "odometry", "candidates", "registration", "graph", "total"
+  std::map<std::string, double> timings_ms;    ///< "modelling", "odometry", "candidates", "registration", "loops", "graph", "joint_rounds" (with several sessions), "total"
   std::size_t candidates_within = 0;           ///< candidate pairs within sessions
   std::size_t candidates_across = 0;           ///< candidate pairs across sessions
   std::vector<std::vector<std::size_t>> place_ranking;  ///< per scan, the scans of other sessions ranked by descriptor (best first, top place_candidates_per_scan)
