@@ -149,7 +149,14 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
   for (const std::string& session : result.list.sessions)
     if (!joined.count(session)) json << (first ? "" : ", ") << json_string(session), first = false;
   json << "],\n  \"candidates_within_sessions\": " << result.candidates_within
-       << ",\n  \"candidates_across_sessions\": " << result.candidates_across << ",\n  \"edges\": {";
+       << ",\n  \"candidates_across_sessions\": " << result.candidates_across << ",\n  \"joint_rounds\": [";
+  for (std::size_t round = 0; round < result.joint_rounds.size(); ++round) {
+    const JointRound& joint = result.joint_rounds[round];
+    json << (round == 0 ? "" : ", ") << "{\"candidates\": " << joint.candidates << ", \"registered\": " << joint.registered
+         << ", \"ok\": " << joint.ok << ", \"ambiguous\": " << joint.ambiguous << ", \"gated\": " << joint.gated
+         << ", \"used\": " << joint.used << ", \"sessions_in_map_frame\": " << joint.sessions_in_map_frame << "}";
+  }
+  json << "],\n  \"edges\": {";
   first = true;
   for (const auto& [name, value] : counts) json << (first ? "" : ", ") << json_string(name) << ": " << value, first = false;
   json << "},\n  \"graph\": {\"initial_cost\": " << json_number(result.graph.initial_cost)
@@ -171,6 +178,10 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
        << ", \"use_ambiguous_edges\": " << (options.use_ambiguous_edges ? "true" : "false")
        << ", \"use_ambiguous_edges_across_sessions\": " << (options.use_ambiguous_edges_across_sessions ? "true" : "false")
        << ", \"odometry_gate_sigmas\": " << json_number(options.odometry_gate_sigmas)
+       << ", \"joint_rounds\": " << options.joint_rounds << ", \"joint_radius\": " << json_number(options.joint_radius)
+       << ", \"joint_gate_translation\": " << json_number(options.joint_gate_translation)
+       << ", \"joint_gate_rotation_degrees\": " << json_number(options.joint_gate_rotation_degrees)
+       << ", \"use_ambiguous_joint_edges\": " << (options.use_ambiguous_joint_edges ? "true" : "false")
        << ", \"dcs_phi\": " << json_number(options.graph.dcs_phi) << "}";
   if (!evaluation_json.empty()) json << ",\n  \"evaluation\": " << evaluation_json;
   json << "\n}\n";
@@ -416,11 +427,20 @@ MapEvaluation evaluate_map(const MapResult& result, const std::vector<PoseRow>& 
           break;
         }
     }
-    if (place_revisit && scan < result.place_ranking.size() && !result.place_ranking[scan].empty()) {
+    const bool ranked = scan < result.place_ranking.size() && !result.place_ranking[scan].empty();
+    const bool searched = scan < result.joint_candidates.size() && !result.joint_candidates[scan].empty();
+    if (place_revisit && ranked) {
       ++evaluation.place_queries;
       for (std::size_t other : result.place_ranking[scan])
         if ((truth[scan].translation() - truth[other].translation()).norm() <= 10.0) place_hit = true;
       if (place_hit) ++evaluation.place_hits;
+    }
+    if (place_revisit && (ranked || searched)) {
+      ++evaluation.joint_place_queries;
+      if (searched)
+        for (std::size_t other : result.joint_candidates[scan])
+          if ((truth[scan].translation() - truth[other].translation()).norm() <= 10.0) place_hit = true;
+      if (place_hit) ++evaluation.joint_place_hits;
     }
   }
   evaluation.recall = evaluation.true_revisits == 0 ? 0.0 : static_cast<double>(evaluation.closed_revisits) / evaluation.true_revisits;
@@ -441,7 +461,8 @@ std::string map_evaluation_json(const MapEvaluation& evaluation) {
        << ", \"precision\": " << json_number(evaluation.precision) << ", \"true_revisits\": " << evaluation.true_revisits
        << ", \"closed_revisits\": " << evaluation.closed_revisits << ", \"recall\": " << json_number(evaluation.recall)
        << ", \"returns\": " << evaluation.returns << ", \"closed_returns\": " << evaluation.closed_returns
-       << ", \"place_queries\": " << evaluation.place_queries << ", \"place_hits\": " << evaluation.place_hits << "}";
+       << ", \"place_queries\": " << evaluation.place_queries << ", \"place_hits\": " << evaluation.place_hits
+       << ", \"joint_place_queries\": " << evaluation.joint_place_queries << ", \"joint_place_hits\": " << evaluation.joint_place_hits << "}";
   return json.str();
 }
 

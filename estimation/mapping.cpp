@@ -17,6 +17,7 @@
 #include <list>
 #include <mutex>
 #include <numeric>
+#include <set>
 
 namespace quadrix {
 namespace {
@@ -319,6 +320,13 @@ std::vector<double> path_lengths(const std::vector<Eigen::Isometry3d>& poses, st
   for (std::size_t index = begin + 1; index < end; ++index)
     length[index - begin] = length[index - begin - 1] + (poses[index].translation() - poses[index - 1].translation()).norm();
   return length;
+}
+
+/// How many sessions (index ranges) have their first scan in the map frame.
+std::size_t joined_sessions(const std::vector<bool>& in_map_frame, const std::vector<std::pair<std::size_t, std::size_t>>& sessions) {
+  std::size_t joined = 0;
+  for (const auto& session : sessions) joined += in_map_frame[session.first];
+  return joined;
 }
 
 }  // namespace
@@ -655,26 +663,127 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     }
   }
 
-  std::vector<PoseGraphEdge> graph_edges;
-  std::vector<std::size_t> graph_edge_of;
-  for (std::size_t index = 0; index < result.edges.size(); ++index) {
-    const MapEdge& edge = result.edges[index];
-    if (!edge.used) continue;
-    const bool loop = edge.kind == MapEdgeKind::Loop;
-    graph_edges.push_back({edge.from, edge.to, edge.transform, edge.information, loop && edge.status == "ok", loop && edge.status != "ok"});
-    graph_edge_of.push_back(index);
-  }
+  // Solves the graph of the used edges from the current poses (Huber on `ok` loop edges, DCS on the others).
+  const auto solve_graph = [&] {
+    std::vector<PoseGraphEdge> graph_edges;
+    std::vector<std::size_t> graph_edge_of;
+    for (std::size_t index = 0; index < result.edges.size(); ++index) {
+      const MapEdge& edge = result.edges[index];
+      if (!edge.used) continue;
+      const bool loop = edge.kind == MapEdgeKind::Loop;
+      graph_edges.push_back({edge.from, edge.to, edge.transform, edge.information, loop && edge.status == "ok", loop && edge.status != "ok"});
+      graph_edge_of.push_back(index);
+    }
+    result.graph = optimise_pose_graph(result.poses, graph_edges, options.graph);
+    for (std::size_t k = 0; k < graph_edges.size(); ++k) {
+      MapEdge& edge = result.edges[graph_edge_of[k]];
+      edge.chi2_before = result.graph.initial_chi2[k];
+      edge.chi2_after = result.graph.final_chi2[k];
+      edge.dcs_scale = result.graph.final_scale[k];
+    }
+    result.in_map_frame.assign(count, false);
+    for (std::size_t index = 0; index < count; ++index) result.in_map_frame[index] = result.graph.component[index] == result.graph.component[0];
+  };
   result.poses = result.initial;
-  result.graph = optimise_pose_graph(result.poses, graph_edges, options.graph);
-  for (std::size_t k = 0; k < graph_edges.size(); ++k) {
-    MapEdge& edge = result.edges[graph_edge_of[k]];
-    edge.chi2_before = result.graph.initial_chi2[k];
-    edge.chi2_after = result.graph.final_chi2[k];
-    edge.dcs_scale = result.graph.final_scale[k];
-  }
-  result.in_map_frame.assign(count, false);
-  for (std::size_t index = 0; index < count; ++index) result.in_map_frame[index] = result.graph.component[index] == result.graph.component[0];
+  solve_graph();
   result.timings_ms["graph"] = elapsed_ms(stage);
+
+  // Across sessions again, now in the joint map frame (LIO-SAM's radius search, as within a session):
+  // around each placed scan's map position, the nearest scans of each earlier placed session, one a
+  // pass; registered globally from the models (no guess), kept when the answer agrees with the
+  // relative pose of the current map poses within the gate (the placement's error), then solved
+  // again. Rounds repeat while they add used edges; a scan that already has a used edge to a
+  // session is not searched again against it.
+  if (sessions.size() > 1 && options.joint_rounds > 0) {
+    const Clock::time_point joint_start = Clock::now();
+    double joint_graph_ms = 0.0;
+    result.joint_candidates.assign(count, {});
+    std::set<std::pair<std::size_t, std::size_t>> registered_pairs;  // (smaller, larger) scan index
+    for (const MapEdge& edge : result.edges)
+      if (edge.kind == MapEdgeKind::Loop) registered_pairs.emplace(std::min(edge.from, edge.to), std::max(edge.from, edge.to));
+    for (std::size_t round = 1; round <= options.joint_rounds; ++round) {
+      JointRound summary;
+      std::set<std::pair<std::size_t, std::size_t>> linked;  // (scan, session) with a used edge between them
+      for (const MapEdge& edge : result.edges)
+        if (edge.used && edge.across_sessions) linked.emplace(edge.from, session_of[edge.to]), linked.emplace(edge.to, session_of[edge.from]);
+      std::vector<MapPairRequest> requests;
+      for (std::size_t session = 1; session < sessions.size(); ++session) {
+        if (!result.in_map_frame[sessions[session].first]) continue;
+        for (std::size_t index = sessions[session].first; index < sessions[session].second; ++index)
+          for (std::size_t earlier = 0; earlier < session; ++earlier) {
+            const auto [begin, end] = sessions[earlier];
+            if (!result.in_map_frame[begin] || linked.count({index, earlier})) continue;
+            std::vector<std::pair<double, std::size_t>> near;
+            for (std::size_t other = begin; other < end; ++other) {
+              const double distance = (result.poses[other].translation() - result.poses[index].translation()).norm();
+              if (distance <= options.joint_radius) near.emplace_back(distance, other);
+            }
+            std::sort(near.begin(), near.end());
+            std::vector<std::size_t> chosen;
+            for (const auto& [distance, other] : near) {
+              if (chosen.size() >= options.candidates_per_scan) break;
+              bool spaced = true;
+              for (std::size_t kept : chosen)
+                if (std::abs(travelled_at[kept] - travelled_at[other]) < options.minimum_candidate_spacing) spaced = false;
+              if (spaced) chosen.push_back(other);
+            }
+            for (std::size_t other : chosen) {
+              ++summary.candidates;
+              result.joint_candidates[index].push_back(other);
+              if (!registered_pairs.emplace(std::min(index, other), std::max(index, other)).second) continue;
+              MapPairRequest request;
+              request.from = index;
+              request.to = other;
+              requests.push_back(request);
+            }
+          }
+      }
+      summary.registered = requests.size();
+      result.candidates_across += requests.size();
+      if (requests.empty()) {
+        summary.sessions_in_map_frame = joined_sessions(result.in_map_frame, sessions);
+        result.joint_rounds.push_back(summary);
+        break;
+      }
+      const Clock::time_point registration_start = Clock::now();
+      std::size_t done = 0;
+      std::vector<MapEdge> found = register_batch(requests, [&] {
+        if (progress) progress("joint-frame candidates registered (round " + std::to_string(round) + ")", ++done, requests.size());
+      });
+      registration_ms += elapsed_ms(registration_start);
+      for (MapEdge& edge : found) {
+        edge.across_sessions = true;
+        const Eigen::Isometry3d predicted = result.poses[edge.to].inverse() * result.poses[edge.from];
+        const double rotation = Eigen::AngleAxisd(predicted.linear().transpose() * edge.transform.linear()).angle() / kDegrees;
+        const double translation = (edge.transform.translation() - predicted.translation()).norm();
+        char departure[160];
+        std::snprintf(departure, sizeof departure, "joint-frame round %zu: departs from the map poses by %.2f deg and %.2f m", round,
+                      rotation, translation);
+        const bool ok = edge.status == "ok", ambiguous = edge.status == "ambiguous";
+        summary.ok += ok;
+        summary.ambiguous += ambiguous;
+        const bool agrees = rotation <= options.joint_gate_rotation_degrees && translation <= options.joint_gate_translation;
+        edge.used = agrees && (ok || (ambiguous && options.use_ambiguous_joint_edges));
+        if ((ok || ambiguous) && !agrees) ++summary.gated;
+        summary.used += edge.used;
+        const std::string verdict = edge.used ? "" : (ok || ambiguous) && !agrees ? " (beyond the gate: not in the graph)"
+                                                                                   : " (not in the graph: " + edge.status + ")";
+        edge.note = std::string(departure) + verdict + (edge.note.empty() ? "" : "; " + edge.note);
+        result.edges.push_back(std::move(edge));
+      }
+      if (summary.used > 0) {
+        const Clock::time_point graph_start = Clock::now();
+        solve_graph();
+        joint_graph_ms += elapsed_ms(graph_start);
+      }
+      summary.sessions_in_map_frame = joined_sessions(result.in_map_frame, sessions);
+      result.joint_rounds.push_back(summary);
+      if (summary.used == 0) break;
+    }
+    result.timings_ms["registration"] = registration_ms;
+    result.timings_ms["graph"] += joint_graph_ms;
+    result.timings_ms["joint_rounds"] = elapsed_ms(joint_start);
+  }
   result.timings_ms["total"] = elapsed_ms(run_start);
   return result;
 }

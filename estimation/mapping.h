@@ -6,7 +6,8 @@
 //             motion verified by the registration's checks, else global registration),
 //   candidates within a session by radius search around the odometry position (LIO-SAM), the radius
 //             growing with the distance travelled since the last accepted loop; across sessions by
-//             a rotation-invariant bird's-eye ring descriptor of each scan,
+//             a rotation-invariant bird's-eye ring descriptor of each scan, then, once sessions are
+//             placed in the map frame, by radius search there (rounds, each followed by a solve),
 //   register  candidate pairs from their cached models (register_models), verified on the clouds
 //             loaded on demand (verify_registration),
 //   optimise  the pose graph (optimise_pose_graph; loop edges under DCS),
@@ -45,6 +46,11 @@ struct MapOptions {
   // Across sessions.
   std::size_t place_candidates_per_scan = 3;   ///< the best-ranked this many scans of other sessions are registered with each scan
   std::size_t place_query_stride = 1;          ///< query every this many scans of a session across sessions
+  std::size_t joint_rounds = 3;                ///< rounds of loop candidates across sessions by radius search in the joint map frame once sessions are placed, each followed by a graph solve (0: none; stops early when a round adds no used edge)
+  double joint_radius = 30.0;                  ///< radius of that search around each scan's current map position, m (covers the placement's error: sessions placed by a few edges lie a few metres off)
+  double joint_gate_translation = 10.0;        ///< a joint-frame edge stays out of the graph when its translation departs from the relative pose of the current map poses by more than this, m
+  double joint_gate_rotation_degrees = 15.0;   ///< or its rotation by more than this, degrees
+  bool use_ambiguous_joint_edges = false;      ///< ambiguous edges of the joint-frame rounds that pass the gate enter the graph as switchable edges
   // Odometry when none is given.
   bool register_consecutive = true;            ///< sessions without odometry are registered scan to scan
   // Loop edges into the graph.
@@ -101,6 +107,17 @@ struct MapEdge {
   std::string note;                            ///< why not used, or the registration's message
 };
 
+/// One round of loop candidates across sessions by radius search in the joint map frame.
+struct JointRound {
+  std::size_t candidates = 0;                  ///< pairs proposed (already registered ones included)
+  std::size_t registered = 0;                  ///< pairs registered in this round (not registered before)
+  std::size_t ok = 0;                          ///< of those, `ok`
+  std::size_t ambiguous = 0;                   ///< of those, `ambiguous`
+  std::size_t gated = 0;                       ///< `ok` or `ambiguous` ones the joint-frame gate kept out
+  std::size_t used = 0;                        ///< edges of this round that entered the graph
+  std::size_t sessions_in_map_frame = 0;       ///< sessions joined to the first after this round's solve
+};
+
 /// Everything map_scans returns.
 struct MapResult {
   ScanList list;                               ///< the input
@@ -112,10 +129,12 @@ struct MapResult {
   std::vector<SceneModel> models;              ///< each scan's model (sensor frame)
   std::vector<std::string> presets;            ///< the preset each scan was modelled with
   PoseGraphSummary graph;                      ///< the optimisation
-  std::map<std::string, double> timings_ms;    ///< "loading_and_modelling", "odometry", "candidates", "registration", "graph", "total"
+  std::map<std::string, double> timings_ms;    ///< "modelling", "odometry", "candidates", "registration", "loops", "graph", "joint_rounds" (with several sessions), "total"
   std::size_t candidates_within = 0;           ///< candidate pairs within sessions
   std::size_t candidates_across = 0;           ///< candidate pairs across sessions
   std::vector<std::vector<std::size_t>> place_ranking;  ///< per scan, the scans of other sessions ranked by descriptor (best first, top place_candidates_per_scan)
+  std::vector<std::vector<std::size_t>> joint_candidates;  ///< per scan, the scans of earlier sessions the joint-frame radius search proposed (every round)
+  std::vector<JointRound> joint_rounds;        ///< what each round of the joint-frame search found
 };
 
 /// Progress callback: stage name, done, total.
@@ -210,6 +229,8 @@ struct MapEvaluation {
   double recall = 0.0;                 ///< closed / true revisits
   std::size_t place_queries = 0;       ///< scans with a true revisit in another session within 10 m
   std::size_t place_hits = 0;          ///< of those, with such a scan among their ranked candidates
+  std::size_t joint_place_queries = 0; ///< scans with a true revisit in another session within 10 m searched by the descriptor or in the joint frame
+  std::size_t joint_place_hits = 0;    ///< of those, with such a scan among their ranked or joint-frame candidates
   std::vector<std::size_t> wrong_edges;///< indices into MapResult::edges of wrong used loop edges
   std::string scope;                   ///< "map" (every scan joined) or which sessions were compared
 };

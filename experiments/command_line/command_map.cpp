@@ -69,7 +69,8 @@ int run_on_scheduler(const MapCommandOptions& options) {
   arguments.insert(arguments.end(), {"--maximum-loop-radius", number(options.map.maximum_loop_radius), "--candidate-spacing",
                                      number(options.map.minimum_candidate_spacing), "--information-scale",
                                      number(options.map.loop_information_scale), "--odometry-gate",
-                                     number(options.map.odometry_gate_sigmas)});
+                                     number(options.map.odometry_gate_sigmas), "--joint-rounds", std::to_string(options.map.joint_rounds),
+                                     "--joint-radius", number(options.map.joint_radius)});
   if (!options.map.use_ambiguous_edges) arguments.push_back("--no-ambiguous-edges");
   if (options.map.use_ambiguous_edges_across_sessions) arguments.push_back("--ambiguous-edges-across-sessions");
   if (options.map.loop_information_from_registration) arguments.push_back("--registration-information");
@@ -168,8 +169,9 @@ void run(const MapCommandOptions& options) {
     std::printf("returns (an earlier scan within 30 m after the path left 30 m, or another session's): %zu / %zu closed by a right ok loop edge\n",
                 evaluation->closed_returns, evaluation->returns);
     if (evaluation->place_queries > 0)
-      std::printf("place recognition: %zu / %zu scans revisiting another session had a true match (10 m) among their candidates\n",
-                  evaluation->place_hits, evaluation->place_queries);
+      std::printf("place recognition: %zu / %zu scans revisiting another session had a true match (10 m) among their candidates"
+                  "; with the joint-frame search %zu / %zu\n",
+                  evaluation->place_hits, evaluation->place_queries, evaluation->joint_place_hits, evaluation->joint_place_queries);
   }
   std::printf("wrote %s (poses.tsv, edges.csv, report.json, map.ply, map_model.qsm, %s)\n", options.out.c_str(),
               std::filesystem::path(page).filename().string().c_str());
@@ -204,6 +206,11 @@ const CommandRegistration registration(75, [](CLI::App& app) {
   command->add_option("--odometry-gate", options->map.odometry_gate_sigmas,
                       "Loop edges within a session departing from the odometry by more than this many drift sigmas stay out (0: no gate)")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command->add_option("--joint-rounds", options->map.joint_rounds,
+                      "Rounds of loop candidates across sessions by radius search in the joint map frame once placed (0: none)")
+      ->capture_default_str();
+  command->add_option("--joint-radius", options->map.joint_radius, "Radius of that search around each scan's map position, m")
       ->capture_default_str();
   command->add_option("--map-voxel", options->map.map_voxel, "map.ply keeps one point per cube of this edge, m");
   command->callback([options] { run(*options); });

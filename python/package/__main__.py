@@ -35,6 +35,9 @@ def _parser():
     command.add_argument("--no-ambiguous-edges", action="store_true", help="Leave ambiguous loop edges out of the graph")
     command.add_argument("--ambiguous-edges-across-sessions", action="store_true",
                          help="Let ambiguous loop edges between sessions into the graph too")
+    command.add_argument("--joint-rounds", type=int,
+                         help="Rounds of loop candidates across sessions by radius search in the joint map frame (0: none)")
+    command.add_argument("--joint-radius", type=float, help="Radius of that search around each scan's map position, m")
     command.add_argument("--map-voxel", type=float, help="map.ply keeps one point per cube of this edge, m")
     return parser
 
@@ -45,7 +48,8 @@ def _options(arguments):
              "minimum_loop_travel": "minimum_loop_travel", "candidates_per_scan": "candidates_per_scan",
              "place_candidates": "place_candidates_per_scan", "map_voxel": "map_voxel",
              "maximum_loop_radius": "maximum_loop_radius", "candidate_spacing": "minimum_candidate_spacing",
-             "information_scale": "loop_information_scale", "odometry_gate": "odometry_gate_sigmas"}
+             "information_scale": "loop_information_scale", "odometry_gate": "odometry_gate_sigmas",
+             "joint_rounds": "joint_rounds", "joint_radius": "joint_radius"}
     options = {"preset": arguments.preset}
     for argument, option in names.items():
         value = getattr(arguments, argument)

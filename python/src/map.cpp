@@ -54,6 +54,11 @@ MapOptions map_options_from(const py::dict& keywords) {
       else if (key == "minimum_candidate_spacing") options.minimum_candidate_spacing = value.cast<double>();
       else if (key == "place_candidates_per_scan") options.place_candidates_per_scan = value.cast<std::size_t>();
       else if (key == "place_query_stride") options.place_query_stride = value.cast<std::size_t>();
+      else if (key == "joint_rounds") options.joint_rounds = value.cast<std::size_t>();
+      else if (key == "joint_radius") options.joint_radius = value.cast<double>();
+      else if (key == "joint_gate_translation") options.joint_gate_translation = value.cast<double>();
+      else if (key == "joint_gate_rotation_degrees") options.joint_gate_rotation_degrees = value.cast<double>();
+      else if (key == "use_ambiguous_joint_edges") options.use_ambiguous_joint_edges = value.cast<bool>();
       else if (key == "register_consecutive") options.register_consecutive = value.cast<bool>();
       else if (key == "use_ambiguous_edges") options.use_ambiguous_edges = value.cast<bool>();
       else if (key == "use_ambiguous_edges_across_sessions") options.use_ambiguous_edges_across_sessions = value.cast<bool>();
@@ -441,7 +446,8 @@ progress: called as progress(stage, done, total) as scans are modelled and pairs
 (total 0 when not known ahead), from the thread that reports it.
 Keyword options: the members of MapOptions (preset, loop_radius, loop_radius_growth,
 maximum_loop_radius, minimum_loop_travel, candidates_per_scan, minimum_candidate_spacing,
-place_candidates_per_scan, place_query_stride, register_consecutive, use_ambiguous_edges,
+place_candidates_per_scan, place_query_stride, joint_rounds, joint_radius, joint_gate_translation,
+joint_gate_rotation_degrees, use_ambiguous_joint_edges, register_consecutive, use_ambiguous_edges,
 use_ambiguous_edges_across_sessions, odometry_gate_sigmas, loop_information_from_registration,
 loop_information_scale,
 loop_translation_sigma, loop_rotation_sigma_degrees, odometry_translation_drift,

@@ -376,11 +376,21 @@ TEST(MappingExecutor, AnotherExecutorSeesTheBatchesAndGivesTheSameMap) {
     EXPECT_FALSE(pair_batches[k][0].local_guess.has_value());
   }
   EXPECT_GT(pair_batches.size(), 3u) << "session a should have loop candidates";
-  ASSERT_EQ(pair_batches.back().size(), 3u);  // one place candidate for each scan of b
-  for (const MapPairRequest& pair : pair_batches.back()) {
-    EXPECT_GE(pair.from, 5u);
-    EXPECT_LT(pair.to, 5u);
-  }
+  // Across sessions: the place candidates in one batch (one for each scan of b), then one batch a
+  // round of the joint-frame search.
+  std::size_t across = 2;
+  while (across < pair_batches.size() && pair_batches[across][0].from < 5u) ++across;
+  ASSERT_LT(across, pair_batches.size());
+  ASSERT_EQ(pair_batches[across].size(), 3u);
+  std::size_t joint_batches = 0;
+  for (const JointRound& round : in_process.joint_rounds) joint_batches += round.registered > 0;
+  EXPECT_EQ(pair_batches.size() - across - 1, joint_batches);
+  for (std::size_t k = across; k < pair_batches.size(); ++k)
+    for (const MapPairRequest& pair : pair_batches[k]) {
+      EXPECT_GE(pair.from, 5u);
+      EXPECT_LT(pair.to, 5u);
+      EXPECT_FALSE(pair.local_guess.has_value());
+    }
 
   // The same map.
   ASSERT_EQ(elsewhere.edges.size(), in_process.edges.size());
@@ -400,6 +410,113 @@ TEST(MappingExecutor, AnotherExecutorSeesTheBatchesAndGivesTheSameMap) {
     EXPECT_LE((in_process.poses[k].matrix() - elsewhere.poses[k].matrix()).cwiseAbs().maxCoeff(), 1e-9) << k;
   EXPECT_EQ(elsewhere.presets, in_process.presets);
   EXPECT_EQ(elsewhere.place_ranking, in_process.place_ranking);
+  EXPECT_EQ(elsewhere.joint_candidates, in_process.joint_candidates);
+}
+
+/// Two sessions over the same stretch of the BALM walk (scans 6-21): `a` the even scans with their
+/// true poses as odometry, `b` the odd ones with a yaw drift of `yaw_bias_degrees` per metre (plus
+/// seeded noise) in a frame of their own (turned by 1 rad and shifted 30 m); clouds thinned to a
+/// third. `truth` in the map frame (a's).
+DriftedWalk interleaved_sessions(const fs::path& folder, double yaw_bias_degrees, unsigned seed) {
+  const std::string root = testing::shared_data_path("balm_sequence");
+  std::ifstream poses(root + "/poses.txt");
+  std::ostringstream list;
+  list << "session\tscan\todometry\n";
+  std::mt19937 random(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  Eigen::Isometry3d own_frame = Eigen::Isometry3d::Identity();
+  own_frame.linear() = Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  own_frame.translation() = Eigen::Vector3d(30.0, -12.0, 2.0);
+  DriftedWalk result;
+  std::vector<std::pair<std::string, Eigen::Isometry3d>> walk;
+  std::string line;
+  for (std::size_t index = 0; std::getline(poses, line) && index < 22; ++index) {
+    if (index < 6) continue;  // the walk stands still at first
+    std::istringstream fields(line);
+    std::string name;
+    fields >> name;
+    Eigen::Matrix<double, 3, 4> matrix;
+    for (int k = 0; k < 12; ++k) fields >> matrix(k / 4, k % 4);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(matrix.leftCols<3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+    pose.linear() = svd.matrixU() * svd.matrixV().transpose();
+    pose.translation() = matrix.col(3);
+    PointCloud cloud = read_point_cloud(root + "/" + name);
+    PointCloud thinned;
+    thinned.positions.resize(3, static_cast<Eigen::Index>((cloud.size() + 2) / 3));
+    for (Eigen::Index k = 0; k < thinned.positions.cols(); ++k) thinned.positions.col(k) = cloud.positions.col(3 * k);
+    write_point_cloud((folder / (name + ".ply")).string(), thinned);
+    walk.emplace_back(name, pose);
+  }
+  for (const std::string session : {"a", "b"}) {
+    Eigen::Isometry3d odometry = Eigen::Isometry3d::Identity();
+    std::size_t previous = walk.size();
+    for (std::size_t index = session == "a" ? 0 : 1; index < walk.size(); index += 2) {
+      if (previous == walk.size()) {
+        odometry = session == "a" ? walk[index].second : own_frame;
+      } else if (session == "a") {
+        odometry = walk[index].second;
+      } else {
+        const Eigen::Isometry3d step = walk[previous].second.inverse() * walk[index].second;
+        const double length = step.translation().norm();
+        Eigen::Isometry3d error = Eigen::Isometry3d::Identity();
+        error.linear() = Eigen::AngleAxisd(kPi / 180 * (yaw_bias_degrees * length + 0.3 * noise(random)), Eigen::Vector3d::UnitZ())
+                             .toRotationMatrix();
+        error.translation() = (0.02 + 0.03 * length) * Eigen::Vector3d(noise(random), noise(random), 0.3 * noise(random));
+        odometry = odometry * step * error;
+      }
+      previous = index;
+      list << session << "\t" << walk[index].first << ".ply\t";
+      for (int k = 0; k < 12; ++k) list << (k ? " " : "") << odometry.matrix()(k / 4, k % 4);
+      list << "\n";
+      result.truth.push_back({session, walk[index].first + ".ply", walk[index].second, ""});
+    }
+  }
+  write(folder / "scans.tsv", list.str());
+  result.list = read_scan_list((folder / "scans.tsv").string());
+  return result;
+}
+
+// Two sessions that the place descriptor joins by few edges (every fourth scan of b queries it):
+// the radius search in the joint map frame, once b is placed, registers each of b's scans with its
+// neighbour in a, so b is held along its whole path instead of at its anchors.
+TEST(MappingJointFrame, RadiusSearchAfterPlacementJoinsSessionsAlongTheirPath) {
+  QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
+  TemporaryFolder folder;
+  const DriftedWalk walk = interleaved_sessions(folder.path, 0.7, 5);
+  MapOptions options;
+  options.minimum_loop_travel = 1000.0;  // no loops within a session: only what joins the sessions
+  options.place_candidates_per_scan = 1;
+  options.place_query_stride = 4;
+  options.joint_rounds = 0;
+  const MapResult placed_only = map_scans(walk.list, options);
+  options.joint_rounds = 3;
+  const MapResult joint = map_scans(walk.list, options);
+  const MapEvaluation before = evaluate_map(placed_only, walk.truth);
+  const MapEvaluation after = evaluate_map(joint, walk.truth);
+  const auto right_across = [&](const MapResult& result) {
+    std::size_t right = 0;
+    for (const MapEdge& edge : result.edges)
+      if (edge.used && edge.across_sessions)
+        right += registration_succeeded(edge.transform, walk.truth[edge.to].pose.inverse() * walk.truth[edge.from].pose);
+    return right;
+  };
+  std::printf("two interleaved sessions: place candidates only: ATE %.3f m, %zu right used edges across; with the joint-frame "
+              "search (%zu rounds): ATE %.3f m, %zu right used edges across; odometry %.3f m; wrong used %zu / %zu\n",
+              before.ate, right_across(placed_only), joint.joint_rounds.size(), after.ate, right_across(joint), before.ate_odometry,
+              before.wrong_used_loop_edges, after.wrong_used_loop_edges);
+  EXPECT_TRUE(placed_only.joint_rounds.empty());
+  ASSERT_FALSE(joint.joint_rounds.empty());
+  EXPECT_TRUE(placed_only.in_map_frame.back()) << "the place candidates alone should place b";
+  EXPECT_GT(right_across(joint), right_across(placed_only) + 3);
+  EXPECT_EQ(after.wrong_used_loop_edges, 0u);
+  EXPECT_LT(after.ate, before.ate);
+  EXPECT_LE(after.ate, 0.15);
+  EXPECT_GT(before.ate, 0.2) << "b's drift should matter when it is held at two scans only";
+  // Place recognition: every scan of b searched, its neighbour in a among the joint-frame candidates.
+  EXPECT_EQ(after.joint_place_queries, 8u);
+  EXPECT_EQ(after.joint_place_hits, after.joint_place_queries);
+  EXPECT_EQ(before.joint_place_hits, before.place_hits);
 }
 
 TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
