@@ -520,10 +520,16 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
   result.model.timings_ms["tiles"] = tiles_ms;
   result.model.timings_ms["total"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json tiling_json = {{"tile_size", part.tile_size}, {"tile_size_requested", tiling.tile_size},
+                                      {"tile_points", part.tile_points}, {"largest_tile", part.largest_tile},
                                       {"tiles", part.tiles}, {"margin", tiling.margin}, {"memory_budget", tiling.memory_budget}};
   write_tiled_model(options.out, options.binary, source, options.inputs.size(), extraction.preset, modelling.fitter, result,
                     tiling_json.dump());
-  std::printf("tiles: %llu of %.1f m, margin %.1f m\n", static_cast<unsigned long long>(part.tiles), part.tile_size, tiling.margin);
+  if (part.tile_points > 0)
+    std::printf("tiles: %llu split by point count (at most %llu points, largest %llu) on a %.1f m grid, margin %.1f m\n",
+                static_cast<unsigned long long>(part.tiles), static_cast<unsigned long long>(part.tile_points),
+                static_cast<unsigned long long>(part.largest_tile), part.tile_size, tiling.margin);
+  else
+    std::printf("tiles: %llu of %.1f m, margin %.1f m\n", static_cast<unsigned long long>(part.tiles), part.tile_size, tiling.margin);
 }
 
 // The files of a static scan streamed from disk when it is modelled tile by tile, so the scan is
