@@ -504,9 +504,10 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
   if (tiling.groups > 1) {
     const PartialModel part = model_tile_group(points, extraction, tiling);
     write_partial_model(options.out, part);
-    std::printf("quadrix model %s: tile group %d/%d, %llu tiles of %.1f m, %llu of %llu points, %zu shape pieces; wrote %s "
+    std::printf("quadrix model %s: tile group %d/%d, %llu tiles %s %.1f m, %llu of %llu points, %zu shape pieces; wrote %s "
                 "(join the parts with `quadrix model merge`)\n",
-                source.c_str(), part.group + 1, part.groups, static_cast<unsigned long long>(part.tiles), part.tile_size,
+                source.c_str(), part.group + 1, part.groups, static_cast<unsigned long long>(part.tiles),
+                part.tile_points > 0 ? "split by point count on a grid of" : "of", part.tile_size,
                 static_cast<unsigned long long>(part.group_points), static_cast<unsigned long long>(part.survey_points),
                 part.pieces.size(), options.out.c_str());
     return;
