@@ -771,7 +771,7 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   command->add_flag("--no-page", options->no_page, "Do not write the interactive page (--out with .html) beside the JSON");
   command->add_option("--tile-size", options->tile_size,
                       "Static scans: model tile by tile with square tiles of this edge in x-y, m (default: tiles only "
-                      "when the whole cloud would exceed --memory-budget, sized from it)");
+                      "when the whole cloud would exceed --memory-budget, split by point count to fit it)");
   command->add_option("--memory-budget", options->memory_budget,
                       "Static scans: memory the modelling may hold, bytes or with K, M, G; above it the scan is modelled "
                       "tile by tile")
