@@ -922,7 +922,18 @@ std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const Shape
     }
     update_bounds(points, shape);
   }
-  if (shapes.size() > 1) merge_similar_shapes(shapes, points, normals, options, up);
+  // Two pieces of one primitive may touch only through a third that comes later in the order (a
+  // wall cut by tiles of different sizes: its far piece meets the joined shape only once the piece
+  // between them has joined), so the pass runs again until no piece joins.
+  const auto held_shapes = [&] {
+    return std::count_if(shapes.begin(), shapes.end(), [](const DetectedShape& shape) { return !shape.members.empty(); });
+  };
+  for (auto held = held_shapes(); shapes.size() > 1;) {
+    merge_similar_shapes(shapes, points, normals, options, up);
+    const auto now = held_shapes();
+    if (now == held) break;
+    held = now;
+  }
   // Joined pieces: each sorted piece's first point tells which kept shape now holds it.
   std::vector<int> holder_of_point(static_cast<std::size_t>(total), -1);
   for (std::size_t k = 0; k < shapes.size(); ++k)

@@ -110,6 +110,8 @@ using Clock = std::chrono::steady_clock;
 constexpr double kMaximumTilePoints = 2.0e6;
 // Points read from the source at once.
 constexpr std::size_t kChunkPoints = 1u << 20;
+// Occupied grid cells the count pass holds at most (about 50 MB of hash map) before it doubles the cell.
+constexpr std::size_t kMaximumCountCells = std::size_t{1} << 20;
 // Bytes of tile buffers held in pass 1 before they are appended to their files.
 constexpr std::size_t kBufferedBytes = std::size_t{64} << 20;
 
@@ -156,6 +158,157 @@ class TemporaryFolder {
   std::filesystem::path path_;
 };
 
+/// Floor of a / 2 for negative cell indices too.
+std::int64_t half_floor(std::int64_t a) { return a >= 0 ? a / 2 : -((-a + 1) / 2); }
+
+/// Where the tiles lie in the x-y plane: square tiles of one edge anchored at the origin, or
+/// rectangles of grid cells split by their point count (a k-d split). A tile is named by the grid
+/// indices of its lower corner (tile_key); its corner in metres is those indices times the cell.
+class TileLayout {
+ public:
+  /// Square tiles of edge `size`.
+  static TileLayout squares(double size) {
+    TileLayout layout;
+    layout.cell_ = size;
+    return layout;
+  }
+
+  /// Rectangles of `cell`-sized grid cells covering the occupied cells `cells` (cell key -> points),
+  /// each split in two across its longer side at the line that best halves its points while it
+  /// holds more than `target` points and both halves stay at least `minimum_cells` cells wide. The
+  /// split depends on the counts only, not on the order the points came in.
+  static TileLayout split_by_count(const std::unordered_map<std::uint64_t, std::uint64_t>& cells, double cell,
+                                   std::uint64_t target, std::int64_t minimum_cells) {
+    TileLayout layout;
+    layout.cell_ = cell;
+    layout.target_ = std::max<std::uint64_t>(1, target);
+    std::vector<Cell> list;
+    list.reserve(cells.size());
+    Node root;
+    root.x0 = root.y0 = std::numeric_limits<std::int64_t>::max();
+    root.x1 = root.y1 = std::numeric_limits<std::int64_t>::min();
+    for (const auto& [key, count] : cells) {
+      list.push_back({tile_x(key), tile_y(key), count});
+      root.x0 = std::min(root.x0, tile_x(key)), root.x1 = std::max(root.x1, tile_x(key) + 1);
+      root.y0 = std::min(root.y0, tile_y(key)), root.y1 = std::max(root.y1, tile_y(key) + 1);
+    }
+    if (list.empty()) root.x0 = root.y0 = 0, root.x1 = root.y1 = 1;
+    layout.nodes_.push_back(root);
+    layout.split(0, list, 0, list.size(), std::max<std::int64_t>(1, minimum_cells));
+    return layout;
+  }
+
+  /// Calls visit(key, core) for the tile holding `p` (core true) and for every tile whose
+  /// rectangle widened by `margin` holds it (core false). Square tiles need margin <= edge / 2.
+  template <typename Visit>
+  void visit(const Eigen::Vector3d& p, double margin, Visit&& visit) const {
+    const std::int64_t cx = static_cast<std::int64_t>(std::floor(p.x() / cell_));
+    const std::int64_t cy = static_cast<std::int64_t>(std::floor(p.y() / cell_));
+    if (nodes_.empty()) {
+      const double rx = p.x() - static_cast<double>(cx) * cell_, ry = p.y() - static_cast<double>(cy) * cell_;
+      const int low_x = rx < margin ? -1 : 0, high_x = rx >= cell_ - margin ? 1 : 0;
+      const int low_y = ry < margin ? -1 : 0, high_y = ry >= cell_ - margin ? 1 : 0;
+      for (int dx = low_x; dx <= high_x; ++dx)
+        for (int dy = low_y; dy <= high_y; ++dy) visit(tile_key(cx + dx, cy + dy), dx == 0 && dy == 0);
+      return;
+    }
+    const Node& root = nodes_.front();
+    if (cx < root.x0 || cx >= root.x1 || cy < root.y0 || cy >= root.y1)
+      throw Error("tiles: a point at (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) +
+                  ") lies outside the tiles the first read counted (did the input change between reads?)");
+    stack_.clear();
+    stack_.push_back(0);
+    while (!stack_.empty()) {
+      const Node& node = nodes_[static_cast<std::size_t>(stack_.back())];
+      stack_.pop_back();
+      if (node.axis < 0) {
+        if (node.count == 0) continue;  // no core point: not a tile
+        visit(tile_key(node.x0, node.y0), cx >= node.x0 && cx < node.x1 && cy >= node.y0 && cy < node.y1);
+        continue;
+      }
+      const std::int64_t index = node.axis == 0 ? cx : cy;
+      const double line = static_cast<double>(node.split) * cell_, coordinate = p(node.axis);
+      if (index < node.split || coordinate < line + margin) stack_.push_back(node.left);
+      if (index >= node.split || coordinate >= line - margin) stack_.push_back(node.right);
+    }
+  }
+
+  /// The tile's lower corner in the file's frame (z = 0).
+  Eigen::Vector3d corner(std::uint64_t key) const {
+    return {static_cast<double>(tile_x(key)) * cell_, static_cast<double>(tile_y(key)) * cell_, 0.0};
+  }
+  /// Square tiles: their edge; split tiles: the grid cell's edge, m.
+  double cell() const { return cell_; }
+  /// Split tiles: the points a tile holds at most unless it is at the minimum width (0: squares).
+  std::uint64_t target() const { return target_; }
+
+ private:
+  struct Cell {
+    std::int64_t x, y;
+    std::uint64_t count;
+  };
+  struct Node {
+    int axis = -1;            ///< 0 split across x, 1 across y, -1 a tile
+    std::int64_t split = 0;   ///< cells below this index go left
+    int left = -1, right = -1;
+    std::int64_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;  ///< cells [x0, x1) x [y0, y1)
+    std::uint64_t count = 0;  ///< points of the cells inside
+  };
+
+  void split(int index, std::vector<Cell>& list, std::size_t begin, std::size_t end, std::int64_t minimum_cells) {
+    std::uint64_t total = 0;
+    for (std::size_t i = begin; i < end; ++i) total += list[i].count;
+    nodes_[static_cast<std::size_t>(index)].count = total;
+    const Node box = nodes_[static_cast<std::size_t>(index)];
+    if (total <= target_) return;
+    const std::int64_t width[2] = {box.x1 - box.x0, box.y1 - box.y0};
+    int axis = width[0] >= width[1] ? 0 : 1;
+    if (width[axis] < 2 * minimum_cells) axis = 1 - axis;
+    if (width[axis] < 2 * minimum_cells) return;  // as narrow as a tile may be
+    const auto coordinate = [axis](const Cell& c) { return axis == 0 ? c.x : c.y; };
+    std::sort(list.begin() + static_cast<std::ptrdiff_t>(begin), list.begin() + static_cast<std::ptrdiff_t>(end),
+              [&](const Cell& a, const Cell& b) {
+                return coordinate(a) != coordinate(b) ? coordinate(a) < coordinate(b) : (axis == 0 ? a.y < b.y : a.x < b.x);
+              });
+    // The line (a cell index) where the points below come closest to half of them.
+    const std::int64_t low = (axis == 0 ? box.x0 : box.y0) + minimum_cells, high = (axis == 0 ? box.x1 : box.y1) - minimum_cells;
+    std::vector<std::int64_t> lines{low, high};  // where the points below can change: the cells' own lines
+    for (std::size_t i = begin; i < end; ++i) lines.push_back(std::clamp(coordinate(list[i]), low, high));
+    std::sort(lines.begin(), lines.end());
+    lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
+    std::int64_t best = low;
+    double best_gap = std::numeric_limits<double>::infinity();
+    std::uint64_t below = 0;
+    std::size_t i = begin;
+    for (const std::int64_t line : lines) {
+      while (i < end && coordinate(list[i]) < line) below += list[i++].count;
+      const double gap = std::abs(2.0 * static_cast<double>(below) - static_cast<double>(total));
+      if (gap < best_gap) best_gap = gap, best = line;
+    }
+    std::size_t middle = begin;
+    while (middle < end && coordinate(list[middle]) < best) ++middle;
+    Node left = box, right = box;
+    left.axis = right.axis = -1;
+    (axis == 0 ? left.x1 : left.y1) = best;
+    (axis == 0 ? right.x0 : right.y0) = best;
+    const int left_index = static_cast<int>(nodes_.size());
+    nodes_.push_back(left);
+    nodes_.push_back(right);
+    Node& parent = nodes_[static_cast<std::size_t>(index)];
+    parent.axis = axis;
+    parent.split = best;
+    parent.left = left_index;
+    parent.right = left_index + 1;
+    split(left_index, list, begin, middle, minimum_cells);
+    split(left_index + 1, list, middle, end, minimum_cells);
+  }
+
+  double cell_ = 1.0;
+  std::uint64_t target_ = 0;
+  std::vector<Node> nodes_;            ///< the k-d split, root first (empty: square tiles)
+  mutable std::vector<int> stack_;     ///< visit's work list (pass 1 bins from one thread)
+};
+
 /// Points of one tile: those inside it (core) and those within the margin around it.
 struct TileCounts {
   std::uint64_t core = 0;    ///< points inside the tile
@@ -166,28 +319,21 @@ struct TileCounts {
 /// "<x>_<y>.core" and "<x>_<y>.margin" files.
 class TileBinner {
  public:
-  TileBinner(const std::filesystem::path& folder, double tile_size, double margin, int group, int groups)
-      : folder_(folder), tile_size_(tile_size), margin_(margin), group_(group), groups_(groups) {}
+  TileBinner(const std::filesystem::path& folder, const TileLayout& layout, double margin, int group, int groups)
+      : folder_(folder), layout_(layout), margin_(margin), group_(group), groups_(groups) {}
 
   void add(const Eigen::Vector3d& p) {
-    const std::int64_t ix = static_cast<std::int64_t>(std::floor(p.x() / tile_size_));
-    const std::int64_t iy = static_cast<std::int64_t>(std::floor(p.y() / tile_size_));
-    const double rx = p.x() - static_cast<double>(ix) * tile_size_, ry = p.y() - static_cast<double>(iy) * tile_size_;
-    const int low_x = rx < margin_ ? -1 : 0, high_x = rx >= tile_size_ - margin_ ? 1 : 0;
-    const int low_y = ry < margin_ ? -1 : 0, high_y = ry >= tile_size_ - margin_ ? 1 : 0;
-    for (int dx = low_x; dx <= high_x; ++dx)
-      for (int dy = low_y; dy <= high_y; ++dy) {
-        const bool core = dx == 0 && dy == 0;
-        const std::uint64_t key = tile_key(ix + dx, iy + dy);
-        TileCounts& counts = counts_[key];
-        (core ? counts.core : counts.margin) += 1;
-        if (groups_ > 1 && group_of_tile(key, groups_) != group_) continue;
-        std::vector<float>& buffer = (core ? core_buffers_ : margin_buffers_)[key];
-        buffer.push_back(static_cast<float>(p.x() - static_cast<double>(ix + dx) * tile_size_));
-        buffer.push_back(static_cast<float>(p.y() - static_cast<double>(iy + dy) * tile_size_));
-        buffer.push_back(static_cast<float>(p.z()));
-        buffered_ += 3 * sizeof(float);
-      }
+    layout_.visit(p, margin_, [&](std::uint64_t key, bool core) {
+      TileCounts& counts = counts_[key];
+      (core ? counts.core : counts.margin) += 1;
+      if (groups_ > 1 && group_of_tile(key, groups_) != group_) return;
+      const Eigen::Vector3d corner = layout_.corner(key);
+      std::vector<float>& buffer = (core ? core_buffers_ : margin_buffers_)[key];
+      buffer.push_back(static_cast<float>(p.x() - corner.x()));
+      buffer.push_back(static_cast<float>(p.y() - corner.y()));
+      buffer.push_back(static_cast<float>(p.z()));
+      buffered_ += 3 * sizeof(float);
+    });
     if (buffered_ >= kBufferedBytes) flush();
   }
 
@@ -214,7 +360,8 @@ class TileBinner {
 
  private:
   std::filesystem::path folder_;
-  double tile_size_, margin_;
+  const TileLayout& layout_;
+  double margin_;
   int group_, groups_;
   std::map<std::uint64_t, TileCounts> counts_;
   std::unordered_map<std::uint64_t, std::vector<float>> core_buffers_, margin_buffers_;
@@ -234,29 +381,36 @@ void read_tile_file(const std::filesystem::path& path, std::uint64_t count, cons
         Eigen::Vector3d(values[3 * i], values[3 * i + 1], values[3 * i + 2]) + corner;
 }
 
-/// Tile edge for the budget: the survey's x-y extent divided so that a tile holds about as many
-/// points as `threads` tiles modelled at once may (bounded by kMaximumTilePoints), at least four
-/// margins wide. Reads the source once.
-double tile_size_for_budget(PointChunkSource& source, const TilingOptions& options, int threads) {
-  Eigen::Vector2d lower = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), upper = -lower;
-  std::size_t count = 0;
+/// Tiles for the budget: the points counted on a grid of cells (cell edge the margin, at least
+/// 1 m, doubled while more than kMaximumCountCells cells hold points), then split until a tile holds
+/// at most as many points as `threads` tiles modelled at once may (bounded by kMaximumTilePoints)
+/// or is four margins wide. Reads the source once.
+TileLayout layout_for_budget(PointChunkSource& source, const TilingOptions& options, int threads) {
+  double cell = std::max(options.margin, 1.0);
+  std::unordered_map<std::uint64_t, std::uint64_t> cells;
   Eigen::Matrix3Xd chunk;
   source.rewind();
-  while (source.next_chunk(chunk, kChunkPoints))
+  while (source.next_chunk(chunk, kChunkPoints)) {
     for (Eigen::Index i = 0; i < chunk.cols(); ++i) {
       if (!chunk.col(i).allFinite()) continue;
-      lower = lower.cwiseMin(chunk.col(i).head<2>());
-      upper = upper.cwiseMax(chunk.col(i).head<2>());
-      ++count;
+      ++cells[tile_key(static_cast<std::int64_t>(std::floor(chunk(0, i) / cell)),
+                       static_cast<std::int64_t>(std::floor(chunk(1, i) / cell)))];
     }
+    while (cells.size() > kMaximumCountCells) {  // the grid at twice the edge, each cell the sum of four
+      std::unordered_map<std::uint64_t, std::uint64_t> coarser;
+      for (const auto& [key, count] : cells) coarser[tile_key(half_floor(tile_x(key)), half_floor(tile_y(key)))] += count;
+      cells.swap(coarser);
+      cell *= 2.0;
+    }
+  }
   source.rewind();
-  const double minimum = std::max(4.0 * options.margin, 1.0);
-  if (count == 0) return minimum;
-  const double per_tile = std::min(kMaximumTilePoints, static_cast<double>(options.memory_budget) /
-                                                           (kWholeModellingBytesPerPoint * static_cast<double>(threads)));
-  const Eigen::Vector2d extent = (upper - lower).cwiseMax(minimum);
-  const double tiles = std::max(1.0, static_cast<double>(count) / per_tile);
-  return std::max(minimum, std::sqrt(extent.x() * extent.y() / tiles));
+  const std::uint64_t target =
+      options.tile_points > 0
+          ? static_cast<std::uint64_t>(options.tile_points)
+          : static_cast<std::uint64_t>(std::min(kMaximumTilePoints, static_cast<double>(options.memory_budget) /
+                                                                        (kWholeModellingBytesPerPoint * static_cast<double>(threads))));
+  const double minimum_width = std::max(4.0 * options.margin, 1.0);
+  return TileLayout::split_by_count(cells, cell, target, static_cast<std::int64_t>(std::ceil(minimum_width / cell - 1e-9)));
 }
 
 /// The pieces of one tile's extraction: every shape element holding core points (columns below
@@ -380,14 +534,17 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
   part.group = options.group;
   part.groups = options.groups;
   part.margin = options.margin;
-  part.tile_size = options.tile_size > 0.0 ? options.tile_size : tile_size_for_budget(source, options, threads);
-  if (part.tile_size <= 2.0 * options.margin)
-    throw Error("--tile-size: a tile of " + std::to_string(part.tile_size) + " m must be wider than twice the margin (" +
+  if (options.tile_size > 0.0 && options.tile_size <= 2.0 * options.margin)
+    throw Error("--tile-size: a tile of " + std::to_string(options.tile_size) + " m must be wider than twice the margin (" +
                 std::to_string(options.margin) + " m)");
+  const TileLayout layout =
+      options.tile_size > 0.0 ? TileLayout::squares(options.tile_size) : layout_for_budget(source, options, threads);
+  part.tile_size = layout.cell();
+  part.tile_points = layout.target();
 
   // Pass 1: binning.
   TemporaryFolder folder(options.temporary_parent);
-  TileBinner binner(folder.path(), part.tile_size, options.margin, options.group, options.groups);
+  TileBinner binner(folder.path(), layout, options.margin, options.group, options.groups);
   auto start = Clock::now();
   Eigen::Matrix3Xd chunk;
   source.rewind();
@@ -405,6 +562,7 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
     if (counts.core > 0 && binner.in_group(key)) {
       tiles.push_back(key);
       part.group_points += counts.core;
+      part.largest_tile = std::max(part.largest_tile, counts.core);
     }
   }
   part.tiles = tiles.size();
@@ -436,8 +594,7 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
           ~Leave() { gate.leave(bytes); }
         } leave{gate, bytes};
         // Modelled relative to the tile's corner (georeferenced coordinates keep their precision).
-        const Eigen::Vector3d corner(static_cast<double>(tile_x(key)) * part.tile_size,
-                                     static_cast<double>(tile_y(key)) * part.tile_size, 0.0);
+        const Eigen::Vector3d corner = layout.corner(key);
         Eigen::Matrix3Xd local(3, static_cast<Eigen::Index>(total));
         read_tile_file(binner.file(key, true), counts.core, Eigen::Vector3d::Zero(), local, 0);
         read_tile_file(binner.file(key, false), counts.margin, Eigen::Vector3d::Zero(), local,
@@ -447,7 +604,12 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
         ExtractionOptions tile_extraction = extraction;
         tile_extraction.sensor_origin = extraction.sensor_origin - corner;
         std::vector<detail::ShapeParameters> parameters;
-        const ExtractionResult result = detail::extract_elements_of_points(local, cloud, tile_extraction, {}, &parameters);
+        // Isolated: while the extraction's own parallel loops (the normals) wait, this thread must
+        // not take up another tile, or tiles pile up on its stack beyond `threads` and the memory
+        // held grows with the number of tiles the survey has.
+        ExtractionResult result;
+        tbb::this_task_arena::isolate(
+            [&] { result = detail::extract_elements_of_points(local, cloud, tile_extraction, {}, &parameters); });
         if (parameters.size() != result.elements.size())
           throw Error("tiles: shape parameters missing for tile (" + std::to_string(tile_x(key)) + ", " +
                       std::to_string(tile_y(key)) + ")");
@@ -480,7 +642,8 @@ ModellingResult merge_partial_models(const std::vector<PartialModel>& parts, con
     if (part.groups != groups || part.group < 0 || part.group >= groups)
       throw Error("model merge: parts of different splits (" + std::to_string(part.group + 1) + "/" +
                   std::to_string(part.groups) + " beside n = " + std::to_string(groups) + ")");
-    if (part.tile_size != parts.front().tile_size || part.margin != parts.front().margin)
+    if (part.tile_size != parts.front().tile_size || part.margin != parts.front().margin ||
+        part.tile_points != parts.front().tile_points)
       throw Error("model merge: parts with different tile sizes or margins (" + std::to_string(part.tile_size) + " m vs " +
                   std::to_string(parts.front().tile_size) + " m)");
     if (part.survey_points != parts.front().survey_points)
@@ -656,7 +819,7 @@ ModellingResult model_tiled(PointChunkSource& source, const ExtractionOptions& e
 namespace {
 
 constexpr char kPartialMagic[8] = {'Q', 'D', 'X', 'T', 'I', 'L', 'E', 'S'};
-constexpr std::uint32_t kPartialVersion = 1;
+constexpr std::uint32_t kPartialVersion = 2;
 
 template <typename T>
 void put(std::ostream& out, const T& value) {
@@ -701,6 +864,8 @@ void write_partial_stream(std::ostream& out, const PartialModel& part) {
     put(out, part.survey_points);
     put(out, part.group_points);
     put(out, part.tiles);
+    put(out, part.tile_points);
+    put(out, part.largest_tile);
     put(out, static_cast<std::uint64_t>(part.pieces.size()));
     for (const TilePiece& piece : part.pieces) {
       put(out, static_cast<std::uint32_t>(piece.element_class));
@@ -739,6 +904,8 @@ PartialModel read_partial_stream(std::istream& in, const std::string& path) {
   part.survey_points = reader.get<std::uint64_t>("survey_points");
   part.group_points = reader.get<std::uint64_t>("group_points");
   part.tiles = reader.get<std::uint64_t>("tiles");
+  part.tile_points = reader.get<std::uint64_t>("tile_points");
+  part.largest_tile = reader.get<std::uint64_t>("largest_tile");
   const auto count = reader.get<std::uint64_t>("piece count");
   for (std::uint64_t p = 0; p < count; ++p) {
     TilePiece piece;

@@ -1,6 +1,7 @@
 // Tile-by-tile modelling of large static scans (beyond the paper, whose Pantheon fits in memory):
 // pass 1 bins the points into square tiles of the horizontal plane on disk (a temporary folder,
-// removed afterwards, also on error); pass 2 extracts the static-scan shapes of each tile with a
+// removed afterwards, also on error) — square tiles of a given edge, or rectangles split by their
+// point count so that no tile holds more than a memory budget allows; pass 2 extracts the static-scan shapes of each tile with a
 // margin of overlap (paper §"Quadric Extraction", CGAL Efficient RANSAC), tiles in parallel; pass 3
 // joins the pieces of one primitive cut by tile borders with the rules detect_shapes applies to
 // the pieces of one shape, and fits one quadric per primitive (paper §"Quadric Fitting", Eq. (full
@@ -96,7 +97,8 @@ struct TilingProgress {
 
 /// Options of tiled modelling.
 struct TilingOptions {
-  double tile_size = 0.0;             ///< edge of a square tile in the x-y plane, m (0: chosen from memory_budget)
+  double tile_size = 0.0;             ///< edge of a square tile in the x-y plane, m (0: tiles split by point count, see tile_points)
+  std::size_t tile_points = 0;        ///< without tile_size: core points a tile holds at most (0: from memory_budget and threads, at most 2 M); a tile is split until it holds no more or is four margins wide
   double margin = 2.0;                ///< each tile is modelled with the points this far beyond its edges, m (at least cluster_epsilon, so a shape cut by the edge keeps its connected piece on both sides)
   std::size_t memory_budget = std::size_t{2} << 30;  ///< bytes the modelling may hold at once (default 2 GiB: a 2-core 24 GB machine shared with other work)
   int threads = 0;                    ///< tiles modelled at once (0: every core, within memory_budget)
@@ -134,16 +136,19 @@ struct TilePiece {
 struct PartialModel {
   int group = 0;                      ///< tile group modelled
   int groups = 1;                     ///< number of groups
-  double tile_size = 0.0;             ///< tile edge used, m
+  double tile_size = 0.0;             ///< square tiles: the tile edge used, m; tiles split by count: the edge of the grid cells they are made of, m
+  std::uint64_t tile_points = 0;      ///< tiles split by count: at most this many core points each (0: square tiles of tile_size)
   double margin = 0.0;                ///< margin used, m
   std::uint64_t survey_points = 0;    ///< points of the whole survey
   std::uint64_t group_points = 0;     ///< core points of this group's tiles
   std::uint64_t tiles = 0;            ///< tiles of this group holding points
+  std::uint64_t largest_tile = 0;     ///< core points of this group's largest tile
   std::vector<TilePiece> pieces;      ///< every primitive piece of those tiles
 };
 
-/// Passes 1 and 2: bins `source` into tiles (TilingOptions::tile_size, or sized from the budget with
-/// one more read of the source) and extracts the static-scan shapes (extraction.static_scan must be
+/// Passes 1 and 2: bins `source` into tiles (square tiles of TilingOptions::tile_size, or without it
+/// rectangles split by their point count, counted on a fine grid in one more read of the source:
+/// every process of a split counts the whole survey, so all agree on the tiles) and extracts the static-scan shapes (extraction.static_scan must be
 /// set) of the tiles of group options.group. Throws quadrix::Error on bad options or when a tile
 /// file cannot be written (the temporary folder is removed either way).
 PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions& extraction, const TilingOptions& options);
@@ -160,7 +165,7 @@ ModellingResult merge_partial_models(const std::vector<PartialModel>& parts, con
 ModellingResult model_tiled(PointChunkSource& source, const ExtractionOptions& extraction, const ModellingOptions& modelling,
                             const TilingOptions& options);
 
-/// Writes a partial model (binary, little-endian, magic "QDXTILES" version 1) atomically.
+/// Writes a partial model (binary, little-endian, magic "QDXTILES" version 2) atomically.
 void write_partial_model(const std::string& path, const PartialModel& part);
 /// Reads a partial model; throws quadrix::Error naming the file and what is wrong.
 PartialModel read_partial_model(const std::string& path);

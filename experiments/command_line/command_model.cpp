@@ -566,9 +566,10 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
   if (tiling.groups > 1) {
     const PartialModel part = model_tile_group(points, extraction, tiling);
     write_partial_model(options.out, part);
-    std::printf("quadrix model %s: tile group %d/%d, %llu tiles of %.1f m, %llu of %llu points, %zu shape pieces; wrote %s "
+    std::printf("quadrix model %s: tile group %d/%d, %llu tiles %s %.1f m, %llu of %llu points, %zu shape pieces; wrote %s "
                 "(join the parts with `quadrix model merge`)\n",
-                source.c_str(), part.group + 1, part.groups, static_cast<unsigned long long>(part.tiles), part.tile_size,
+                source.c_str(), part.group + 1, part.groups, static_cast<unsigned long long>(part.tiles),
+                part.tile_points > 0 ? "split by point count on a grid of" : "of", part.tile_size,
                 static_cast<unsigned long long>(part.group_points), static_cast<unsigned long long>(part.survey_points),
                 part.pieces.size(), options.out.c_str());
     return;
@@ -582,10 +583,16 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
   result.model.timings_ms["tiles"] = tiles_ms;
   result.model.timings_ms["total"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json tiling_json = {{"tile_size", part.tile_size}, {"tile_size_requested", tiling.tile_size},
+                                      {"tile_points", part.tile_points}, {"largest_tile", part.largest_tile},
                                       {"tiles", part.tiles}, {"margin", tiling.margin}, {"memory_budget", tiling.memory_budget}};
   write_tiled_model(options.out, options.binary, source, options.inputs.size(), extraction.preset, modelling.fitter, result,
                     tiling_json.dump());
-  std::printf("tiles: %llu of %.1f m, margin %.1f m\n", static_cast<unsigned long long>(part.tiles), part.tile_size, tiling.margin);
+  if (part.tile_points > 0)
+    std::printf("tiles: %llu split by point count (at most %llu points, largest %llu) on a %.1f m grid, margin %.1f m\n",
+                static_cast<unsigned long long>(part.tiles), static_cast<unsigned long long>(part.tile_points),
+                static_cast<unsigned long long>(part.largest_tile), part.tile_size, tiling.margin);
+  else
+    std::printf("tiles: %llu of %.1f m, margin %.1f m\n", static_cast<unsigned long long>(part.tiles), part.tile_size, tiling.margin);
 }
 
 // The files of a static scan streamed from disk when it is modelled tile by tile, so the scan is
@@ -855,7 +862,7 @@ const CommandRegistration registration(50, [](CLI::App& app) {
   command->add_flag("--no-page", options->no_page, "Do not write the interactive page (--out with .html) beside the JSON");
   command->add_option("--tile-size", options->tile_size,
                       "Static scans: model tile by tile with square tiles of this edge in x-y, m (default: tiles only "
-                      "when the whole cloud would exceed --memory-budget, sized from it)");
+                      "when the whole cloud would exceed --memory-budget, split by point count to fit it)");
   command->add_option("--memory-budget", options->memory_budget,
                       "Static scans: memory the modelling may hold, bytes or with K, M, G; above it the scan is modelled "
                       "tile by tile")

@@ -89,7 +89,7 @@ pieces of those tiles as bytes (the partial model ``quadrix model --tile i/n`` w
 
 cloud: a Cloud, an (N, 3) array or a file path (a path is what Dask workers are given; it is read
 chunk by chunk, never whole, when its format can be streamed).
-preset: a static-scan preset (monument). tile_size: tile edge in metres (0: sized from a 2 GiB
+preset: a static-scan preset (monument). tile_size: tile edge in metres (0: tiles split by point count to fit a 2 GiB
 memory budget). margin: overlap modelled around each tile, metres.
 )doc");
 

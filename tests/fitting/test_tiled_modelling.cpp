@@ -150,6 +150,60 @@ TEST_F(TiledModelling, AnySplitIntoTileGroupsGivesTheSameModel) {
   EXPECT_THROW(merge_partial_models(parts, scene_extraction(), scene_modelling()), Error);
 }
 
+// Without a tile edge the tiles are split by their point count: none holds more than asked for,
+// the pieces still merge back into one pipe, one wall and the ground, and any split into tile
+// groups gives the same model (every process counts the whole survey, so all agree on the tiles).
+TEST_F(TiledModelling, TilesSplitByPointCountHoldAtMostTheTargetAndMergeBack) {
+  const Eigen::Matrix3Xf points = make_scene(5);
+  MatrixChunkSource source(points, "scene");
+  tiling.tile_size = 0.0;
+  tiling.tile_points = static_cast<std::size_t>(points.cols() / 4);  // about a quarter of the scene each
+  const PartialModel part = model_tile_group(source, scene_extraction(), tiling);
+  EXPECT_EQ(part.tile_points, tiling.tile_points);
+  EXPECT_GE(part.tiles, 4u);
+  EXPECT_LE(part.largest_tile, part.tile_points);
+  EXPECT_GT(part.largest_tile, part.tile_points / 3);  // split where needed, not into slivers
+  EXPECT_EQ(part.survey_points, static_cast<std::uint64_t>(points.cols()));
+  EXPECT_EQ(part.group_points, part.survey_points);
+  EXPECT_TRUE(std::filesystem::is_empty(folder));
+  const ModellingResult merged = merge_partial_models({part}, scene_extraction(), scene_modelling());
+  EXPECT_EQ(type_counts(merged.model)[QuadricType::CircularCylinder], 1);
+  EXPECT_EQ(type_counts(merged.model)[QuadricType::Plane], 2);
+  EXPECT_TRUE(merged.model.has_ground);
+  for (std::size_t i = 0; i < merged.model.augmented_begin; ++i) {
+    if (merged.model.types[i] != QuadricType::CircularCylinder) continue;
+    const QuadricDecomposition shape = merged.model.records[i].quadric().decompose();
+    EXPECT_NEAR(shape.scale.x(), 0.5, 0.02);
+    EXPECT_GT(std::abs(shape.rotation.col(2).x()), 0.999);
+    EXPECT_GT(merged.model.element_point_counts[i], 0.9 * 150.0 * 2.0 * kPi * 0.5 * 20.0);
+  }
+
+  std::vector<PartialModel> parts;
+  for (int group = 0; group < 3; ++group) {
+    TilingOptions split = tiling;
+    split.group = group;
+    split.groups = 3;
+    const std::string path = (folder / ("part" + std::to_string(group) + ".tiles")).string();
+    write_partial_model(path, model_tile_group(source, scene_extraction(), split));
+    parts.push_back(read_partial_model(path));
+    EXPECT_EQ(parts.back().tile_points, part.tile_points);
+  }
+  const ModellingResult split = merge_partial_models(parts, scene_extraction(), scene_modelling());
+  ASSERT_EQ(split.model.size(), merged.model.size());
+  for (std::size_t i = 0; i < split.model.size(); ++i) {
+    EXPECT_EQ(split.model.types[i], merged.model.types[i]);
+    const auto a = split.model.records[i].to_array(), b = merged.model.records[i].to_array();
+    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-9) << "record " << i << " value " << k;
+  }
+  // Parts of a different split of the tiles do not merge with these.
+  TilingOptions other = tiling;
+  other.tile_points = tiling.tile_points / 2;
+  other.group = 2;
+  other.groups = 3;
+  parts.back() = model_tile_group(source, scene_extraction(), other);
+  EXPECT_THROW(merge_partial_models(parts, scene_extraction(), scene_modelling()), Error);
+}
+
 // The tiles read from a file chunk by chunk give the model the tiles read from memory give.
 TEST_F(TiledModelling, StreamingFromAFileGivesTheInMemoryModel) {
   const Eigen::Matrix3Xf points = make_scene(6);
