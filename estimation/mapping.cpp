@@ -411,10 +411,7 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     models = model_scans(list, options, progress);
   }
   result.timings_ms["modelling"] = elapsed_ms(stage);
-  for (const ScanModel& model : models) {
-    result.models.push_back(model.model);
-    result.presets.push_back(model.preset);
-  }
+  for (const ScanModel& model : models) result.presets.push_back(model.preset);
   CloudCache clouds(list, options.cloud_cache);
   // Registers a batch of independent pairs: by the executor, or here in parallel from the cached
   // models; `each_done` after every pair (in this process) or after the batch (executor).
@@ -784,6 +781,10 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     result.timings_ms["graph"] += joint_graph_ms;
     result.timings_ms["joint_rounds"] = elapsed_ms(joint_start);
   }
+  // The models move into the result once no pair needs them: a copy made when modelling ended
+  // would hold every model twice through the registrations.
+  result.models.reserve(models.size());
+  for (ScanModel& model : models) result.models.push_back(std::move(model.model));
   result.timings_ms["total"] = elapsed_ms(run_start);
   return result;
 }

@@ -375,8 +375,11 @@ def _map_register_task(from_entry, to_entry, kind, guess, from_model, to_model, 
             }
             const py::list parts = client.attr("gather")(futures);
             std::vector<MappedScan> models;
-            for (std::size_t k = 0; k < indices.size(); ++k)
+            // Each model's bytes are let go once parsed, so the driver does not hold every model twice.
+            for (std::size_t k = 0; k < indices.size(); ++k) {
               models.push_back(mapped_scan_from_bytes(parts[k].cast<std::string>(), "model of " + list.scans[indices[k]].scan));
+              parts[k] = py::none();
+            }
             return models;
           };
           executor.register_pairs = [&](const std::vector<MapPairRequest>& pairs) {
