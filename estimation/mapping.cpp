@@ -322,6 +322,23 @@ std::vector<double> path_lengths(const std::vector<Eigen::Isometry3d>& poses, st
   return length;
 }
 
+/// Of the scans `near` (distance, scan), the nearest at most `count`, any two at least `spacing`
+/// apart along their path (`travelled(scan)`): in effect the nearest scan of each earlier pass.
+template <typename Travelled>
+std::vector<std::size_t> nearest_spaced(std::vector<std::pair<double, std::size_t>> near, std::size_t count, double spacing,
+                                        const Travelled& travelled) {
+  std::sort(near.begin(), near.end());
+  std::vector<std::size_t> chosen;
+  for (const auto& [distance, other] : near) {
+    if (chosen.size() >= count) break;
+    bool spaced = true;
+    for (std::size_t kept : chosen)
+      if (std::abs(travelled(kept) - travelled(other)) < spacing) spaced = false;
+    if (spaced) chosen.push_back(other);
+  }
+  return chosen;
+}
+
 /// How many sessions (index ranges) have their first scan in the map frame.
 std::size_t joined_sessions(const std::vector<bool>& in_map_frame, const std::vector<std::pair<std::size_t, std::size_t>>& sessions) {
   std::size_t joined = 0;
@@ -534,15 +551,9 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
         const double distance = (anchored[other - begin].translation() - anchored[index - begin].translation()).norm();
         if (distance <= radius) near.emplace_back(distance, other);
       }
-      std::sort(near.begin(), near.end());
-      std::vector<std::size_t> chosen;
-      for (const auto& [distance, other] : near) {
-        if (chosen.size() >= options.candidates_per_scan) break;
-        bool spaced = true;
-        for (std::size_t kept : chosen)
-          if (std::abs(travelled[kept - begin] - travelled[other - begin]) < options.minimum_candidate_spacing) spaced = false;
-        if (spaced) chosen.push_back(other);
-      }
+      const std::vector<std::size_t> chosen =
+          nearest_spaced(std::move(near), options.candidates_per_scan, options.minimum_candidate_spacing,
+                         [&](std::size_t scan) { return travelled[scan - begin]; });
       candidates_ms += elapsed_ms(candidates_start);
       if (chosen.empty()) continue;
       result.candidates_within += chosen.size();
@@ -715,15 +726,9 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
               const double distance = (result.poses[other].translation() - result.poses[index].translation()).norm();
               if (distance <= options.joint_radius) near.emplace_back(distance, other);
             }
-            std::sort(near.begin(), near.end());
-            std::vector<std::size_t> chosen;
-            for (const auto& [distance, other] : near) {
-              if (chosen.size() >= options.candidates_per_scan) break;
-              bool spaced = true;
-              for (std::size_t kept : chosen)
-                if (std::abs(travelled_at[kept] - travelled_at[other]) < options.minimum_candidate_spacing) spaced = false;
-              if (spaced) chosen.push_back(other);
-            }
+            const std::vector<std::size_t> chosen =
+                nearest_spaced(std::move(near), options.candidates_per_scan, options.minimum_candidate_spacing,
+                               [&](std::size_t scan) { return travelled_at[scan]; });
             for (std::size_t other : chosen) {
               ++summary.candidates;
               result.joint_candidates[index].push_back(other);

@@ -6,6 +6,7 @@
 #include "geometry/las.h"
 #include "tests/geometry/las_test_writer.h"
 #include "test_data.h"
+#include "test_folder.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -33,20 +34,7 @@ using testing::LasTestVlr;
 
 constexpr double kFoot = 0.3048;  // international foot, m (GeoTIFF unit 9002)
 
-/// A fresh folder for one test, removed at destruction.
-struct Folder {
-  std::filesystem::path path;
-  explicit Folder(const std::string& name)
-      : path(std::filesystem::temp_directory_path() / (name + "_" + std::to_string(std::random_device{}()))) {
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~Folder() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path, ignored);
-  }
-  std::string file(const std::string& name) const { return (path / name).string(); }
-};
+using Folder = testing::TemporaryFolder;
 
 /// Runs `quadrix model INPUT ARGUMENTS --out NAME.json`; returns the JSON (empty on failure) and the log.
 nlohmann::json run_model(const Folder& folder, const std::string& input, const std::string& arguments, const std::string& name,
