@@ -553,7 +553,7 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       }
       const std::vector<std::size_t> chosen =
           nearest_spaced(std::move(near), options.candidates_per_scan, options.minimum_candidate_spacing,
-                         [&](std::size_t scan) { return travelled[scan - begin]; });
+                         [&travelled, first = begin](std::size_t scan) { return travelled[scan - first]; });
       candidates_ms += elapsed_ms(candidates_start);
       if (chosen.empty()) continue;
       result.candidates_within += chosen.size();
