@@ -26,7 +26,7 @@ using Clock = std::chrono::steady_clock;
 
 double elapsed_ms(Clock::time_point start) { return std::chrono::duration<double, std::milli>(Clock::now() - start).count(); }
 
-constexpr double kDegrees = 3.14159265358979323846 / 180.0;
+constexpr double kDegrees = kPi / 180.0;  // radians in a degree
 
 /// Rings and sectors of the bird's-eye place descriptor.
 constexpr int kDescriptorRings = 20;
@@ -339,11 +339,63 @@ std::vector<std::size_t> nearest_spaced(std::vector<std::pair<double, std::size_
   return chosen;
 }
 
+/// How far a measured relative pose departs from a predicted one: the angle of the rotation between
+/// them, degrees, and the distance between their translations, m.
+struct PoseDeparture {
+  double degrees = 0.0;
+  double metres = 0.0;
+};
+
+PoseDeparture departure_between(const Eigen::Isometry3d& measured, const Eigen::Isometry3d& predicted) {
+  return {Eigen::AngleAxisd(predicted.linear().transpose() * measured.linear()).angle() / kDegrees,
+          (measured.translation() - predicted.translation()).norm()};
+}
+
 /// How many sessions (index ranges) have their first scan in the map frame.
 std::size_t joined_sessions(const std::vector<bool>& in_map_frame, const std::vector<std::pair<std::size_t, std::size_t>>& sessions) {
   std::size_t joined = 0;
   for (const auto& session : sessions) joined += in_map_frame[session.first];
   return joined;
+}
+
+/// One round of loop candidates across sessions in the joint map frame (LIO-SAM's radius search,
+/// as within a session): for each scan of a placed session and each earlier placed session it has
+/// no used edge to yet, the nearest scans of that session within MapOptions::joint_radius of its
+/// current map position, one a pass (nearest_spaced). Records them in result.joint_candidates and
+/// `summary.candidates`; returns the pairs not registered before, added to `registered` (smaller,
+/// larger scan index).
+std::vector<MapPairRequest> joint_frame_requests(MapResult& result, const std::vector<std::pair<std::size_t, std::size_t>>& sessions,
+                                                 const std::vector<std::size_t>& session_of, const std::vector<double>& travelled_at,
+                                                 const MapOptions& options, std::set<std::pair<std::size_t, std::size_t>>& registered,
+                                                 JointRound& summary) {
+  std::set<std::pair<std::size_t, std::size_t>> linked;  // (scan, session) with a used edge between them
+  for (const MapEdge& edge : result.edges)
+    if (edge.used && edge.across_sessions) linked.emplace(edge.from, session_of[edge.to]), linked.emplace(edge.to, session_of[edge.from]);
+  std::vector<MapPairRequest> requests;
+  for (std::size_t session = 1; session < sessions.size(); ++session) {
+    if (!result.in_map_frame[sessions[session].first]) continue;
+    for (std::size_t index = sessions[session].first; index < sessions[session].second; ++index)
+      for (std::size_t earlier = 0; earlier < session; ++earlier) {
+        const auto [begin, end] = sessions[earlier];
+        if (!result.in_map_frame[begin] || linked.count({index, earlier})) continue;
+        std::vector<std::pair<double, std::size_t>> near;
+        for (std::size_t other = begin; other < end; ++other) {
+          const double distance = (result.poses[other].translation() - result.poses[index].translation()).norm();
+          if (distance <= options.joint_radius) near.emplace_back(distance, other);
+        }
+        for (std::size_t other : nearest_spaced(std::move(near), options.candidates_per_scan, options.minimum_candidate_spacing,
+                                                [&travelled_at](std::size_t scan) { return travelled_at[scan]; })) {
+          ++summary.candidates;
+          result.joint_candidates[index].push_back(other);
+          if (!registered.emplace(std::min(index, other), std::max(index, other)).second) continue;
+          MapPairRequest request;
+          request.from = index;
+          request.to = other;
+          requests.push_back(request);
+        }
+      }
+  }
+  return requests;
 }
 
 }  // namespace
@@ -352,14 +404,12 @@ bool consistent_with_odometry(const Eigen::Isometry3d& measured, const Eigen::Is
                               const MapOptions& options, std::string* why) {
   const double k = options.odometry_gate_sigmas;
   if (!(k > 0.0)) return true;
-  constexpr double kDegree = kPi / 180.0;
   const double rotation_sigma = std::max(options.odometry_rotation_floor_degrees, options.odometry_rotation_drift_degrees * path);
   const double rotation_limit = k * rotation_sigma;
   if (rotation_limit >= 180.0) return true;
   const double translation_limit = k * std::max(options.odometry_translation_floor, options.odometry_translation_drift * path) +
-                                   path * std::sin(std::min(rotation_limit, 90.0) * kDegree);
-  const double rotation = Eigen::AngleAxisd(predicted.linear().transpose() * measured.linear()).angle() / kDegree;
-  const double translation = (measured.translation() - predicted.translation()).norm();
+                                   path * std::sin(std::min(rotation_limit, 90.0) * kDegrees);
+  const auto [rotation, translation] = departure_between(measured, predicted);
   if (rotation <= rotation_limit && translation <= translation_limit) return true;
   if (why != nullptr) {
     char text[256];
@@ -711,35 +761,8 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       if (edge.kind == MapEdgeKind::Loop) registered_pairs.emplace(std::min(edge.from, edge.to), std::max(edge.from, edge.to));
     for (std::size_t round = 1; round <= options.joint_rounds; ++round) {
       JointRound summary;
-      std::set<std::pair<std::size_t, std::size_t>> linked;  // (scan, session) with a used edge between them
-      for (const MapEdge& edge : result.edges)
-        if (edge.used && edge.across_sessions) linked.emplace(edge.from, session_of[edge.to]), linked.emplace(edge.to, session_of[edge.from]);
-      std::vector<MapPairRequest> requests;
-      for (std::size_t session = 1; session < sessions.size(); ++session) {
-        if (!result.in_map_frame[sessions[session].first]) continue;
-        for (std::size_t index = sessions[session].first; index < sessions[session].second; ++index)
-          for (std::size_t earlier = 0; earlier < session; ++earlier) {
-            const auto [begin, end] = sessions[earlier];
-            if (!result.in_map_frame[begin] || linked.count({index, earlier})) continue;
-            std::vector<std::pair<double, std::size_t>> near;
-            for (std::size_t other = begin; other < end; ++other) {
-              const double distance = (result.poses[other].translation() - result.poses[index].translation()).norm();
-              if (distance <= options.joint_radius) near.emplace_back(distance, other);
-            }
-            const std::vector<std::size_t> chosen =
-                nearest_spaced(std::move(near), options.candidates_per_scan, options.minimum_candidate_spacing,
-                               [&](std::size_t scan) { return travelled_at[scan]; });
-            for (std::size_t other : chosen) {
-              ++summary.candidates;
-              result.joint_candidates[index].push_back(other);
-              if (!registered_pairs.emplace(std::min(index, other), std::max(index, other)).second) continue;
-              MapPairRequest request;
-              request.from = index;
-              request.to = other;
-              requests.push_back(request);
-            }
-          }
-      }
+      const std::vector<MapPairRequest> requests =
+          joint_frame_requests(result, sessions, session_of, travelled_at, options, registered_pairs, summary);
       summary.registered = requests.size();
       result.candidates_across += requests.size();
       if (requests.empty()) {
@@ -755,9 +778,8 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       registration_ms += elapsed_ms(registration_start);
       for (MapEdge& edge : found) {
         edge.across_sessions = true;
-        const Eigen::Isometry3d predicted = result.poses[edge.to].inverse() * result.poses[edge.from];
-        const double rotation = Eigen::AngleAxisd(predicted.linear().transpose() * edge.transform.linear()).angle() / kDegrees;
-        const double translation = (edge.transform.translation() - predicted.translation()).norm();
+        const auto [rotation, translation] =
+            departure_between(edge.transform, result.poses[edge.to].inverse() * result.poses[edge.from]);
         char departure[160];
         std::snprintf(departure, sizeof departure, "joint-frame round %zu: departs from the map poses by %.2f deg and %.2f m", round,
                       rotation, translation);
