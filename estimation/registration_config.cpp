@@ -985,6 +985,16 @@ constexpr double kNadirOccupancy = 0.55;
 // ... with a z span at most this fraction of the extent's shorter side.
 constexpr double kNadirHeightRatio = 0.35;
 
+// The 1st and 99th percentiles of `values` by selection, not a full sort (reorders `values`).
+template <typename T>
+std::pair<double, double> central_span(std::vector<T>& values) {
+  const auto low_at = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 100);
+  const auto high_at = values.begin() + static_cast<std::ptrdiff_t>(values.size() * 99 / 100);
+  std::nth_element(values.begin(), high_at, values.end());
+  std::nth_element(values.begin(), low_at, high_at);
+  return {static_cast<double>(*low_at), static_cast<double>(*high_at)};
+}
+
 // Rings: maximal runs of occupied elevation bins separated by empty bins, among the
 // elevations between `low` and `high` (degrees). Bins are 0.05 deg, wider for sparse clouds so that
 // they hold at least ~20 points on average; a bin is occupied when it holds more than half the mean
@@ -1032,13 +1042,7 @@ void measure_sensor_geometry(const PointCloud& cloud, SensorGuess& guess) {
   std::nth_element(ranges.begin(), ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2), ranges.end());
   guess.median_range = ranges[ranges.size() / 2];
   if (elevations.size() < 100) return;
-  // The 1st and 99th percentiles by selection, not a full sort (the ring histogram needs no order).
-  const auto low_at = elevations.begin() + static_cast<std::ptrdiff_t>(elevations.size() / 100);
-  const auto high_at = elevations.begin() + static_cast<std::ptrdiff_t>(elevations.size() * 99 / 100);
-  std::nth_element(elevations.begin(), high_at, elevations.end());
-  std::nth_element(elevations.begin(), low_at, high_at);
-  const double low = *low_at;
-  const double high = *high_at;
+  const auto [low, high] = central_span(elevations);  // the ring histogram needs no order
   guess.elevation_span_degrees = high - low;
   guess.ring_count = count_elevation_rings(elevations, low, high);
 }
@@ -1058,20 +1062,11 @@ NadirCoverage measure_nadir_coverage(const PointCloud& cloud) {
   NadirCoverage coverage;
   const std::size_t count = cloud.size();
   if (count < 1000) return coverage;
-  std::array<std::vector<float>, 3> axes;
-  for (int axis = 0; axis < 3; ++axis) {
-    axes[axis].resize(count);
-    for (std::size_t i = 0; i < count; ++i) axes[axis][i] = cloud.positions(axis, static_cast<Eigen::Index>(i));
-  }
   Eigen::Vector3d low, high;
+  std::vector<float> values(count);
   for (int axis = 0; axis < 3; ++axis) {
-    std::vector<float> values = axes[axis];
-    const auto low_at = values.begin() + static_cast<std::ptrdiff_t>(count / 100);
-    const auto high_at = values.begin() + static_cast<std::ptrdiff_t>(count * 99 / 100);
-    std::nth_element(values.begin(), high_at, values.end());
-    std::nth_element(values.begin(), low_at, high_at);
-    low[axis] = *low_at;
-    high[axis] = *high_at;
+    for (std::size_t i = 0; i < count; ++i) values[i] = cloud.positions(axis, static_cast<Eigen::Index>(i));
+    std::tie(low[axis], high[axis]) = central_span(values);
   }
   const Eigen::Vector3d extent = high - low;
   if (!(extent.x() > 0.0 && extent.y() > 0.0)) return coverage;
@@ -1081,7 +1076,8 @@ NadirCoverage measure_nadir_coverage(const PointCloud& cloud) {
   const std::size_t rows = static_cast<std::size_t>(std::ceil(extent.y() / cell)) + 1;
   std::vector<char> occupied(columns * rows, 0);
   for (std::size_t i = 0; i < count; ++i) {
-    const double x = axes[0][i] - low.x(), y = axes[1][i] - low.y();
+    const double x = cloud.positions(0, static_cast<Eigen::Index>(i)) - low.x();
+    const double y = cloud.positions(1, static_cast<Eigen::Index>(i)) - low.y();
     if (x < 0.0 || y < 0.0 || x > extent.x() || y > extent.y()) continue;
     occupied[static_cast<std::size_t>(x / cell) * rows + static_cast<std::size_t>(y / cell)] = 1;
   }
