@@ -644,8 +644,10 @@ ModellingResult merge_partial_models(const std::vector<PartialModel>& parts, con
                   std::to_string(part.groups) + " beside n = " + std::to_string(groups) + ")");
     if (part.tile_size != parts.front().tile_size || part.margin != parts.front().margin ||
         part.tile_points != parts.front().tile_points)
-      throw Error("model merge: parts with different tile sizes or margins (" + std::to_string(part.tile_size) + " m vs " +
-                  std::to_string(parts.front().tile_size) + " m)");
+      throw Error("model merge: parts of different tilings (tile or grid cell " + std::to_string(part.tile_size) + " m vs " +
+                  std::to_string(parts.front().tile_size) + " m, margin " + std::to_string(part.margin) + " m vs " +
+                  std::to_string(parts.front().margin) + " m, at most " + std::to_string(part.tile_points) + " vs " +
+                  std::to_string(parts.front().tile_points) + " points a tile)");
     if (part.survey_points != parts.front().survey_points)
       throw Error("model merge: parts of different surveys (" + std::to_string(part.survey_points) + " vs " +
                   std::to_string(parts.front().survey_points) + " points)");

@@ -70,9 +70,46 @@ class TiledModelling : public ::testing::Test {
     tiling.temporary_parent = folder.string();
   }
   void TearDown() override { std::filesystem::remove_all(folder); }
+
+  /// The scene's tiles modelled in three groups, each partial model written and read back.
+  std::vector<PartialModel> model_in_three_groups(PointChunkSource& source) const {
+    std::vector<PartialModel> parts;
+    for (int group = 0; group < 3; ++group) {
+      TilingOptions split = tiling;
+      split.group = group;
+      split.groups = 3;
+      const std::string path = (folder / ("part" + std::to_string(group) + ".tiles")).string();
+      write_partial_model(path, model_tile_group(source, scene_extraction(), split));
+      parts.push_back(read_partial_model(path));
+    }
+    return parts;
+  }
+
   std::filesystem::path folder;
   TilingOptions tiling;
 };
+
+/// Both models hold the same records in the same order, to 1e-9.
+void expect_same_records(const SceneModel& model, const SceneModel& reference) {
+  ASSERT_EQ(model.size(), reference.size());
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    EXPECT_EQ(model.types[i], reference.types[i]);
+    const auto a = model.records[i].to_array(), b = reference.records[i].to_array();
+    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-9) << "record " << i << " value " << k;
+  }
+}
+
+/// The model's cylinders are the scene's pipe: radius 0.5 m along x, holding its points from every tile.
+void expect_the_whole_pipe(const SceneModel& model) {
+  for (std::size_t i = 0; i < model.augmented_begin; ++i) {
+    if (model.types[i] != QuadricType::CircularCylinder) continue;
+    const QuadricDecomposition shape = model.records[i].quadric().decompose();
+    EXPECT_NEAR(shape.scale.x(), 0.5, 0.02);
+    EXPECT_GT(std::abs(shape.rotation.col(2).x()), 0.999);  // the axis runs along x
+    // One primitive holds the pipe's points from all tiles (its 9.4k points, not a part of them).
+    EXPECT_GT(model.element_point_counts[i], 0.9 * 150.0 * 2.0 * kPi * 0.5 * 20.0);
+  }
+}
 
 TEST_F(TiledModelling, PiecesCutByATileBorderMergeBackIntoOnePrimitiveEach) {
   const Eigen::Matrix3Xf points = make_scene(3);
@@ -108,14 +145,7 @@ TEST_F(TiledModelling, PiecesCutByATileBorderMergeBackIntoOnePrimitiveEach) {
   EXPECT_TRUE(merged.model.has_ground);
   EXPECT_GT(merged.model.ground_normal.z(), 0.999);
   EXPECT_NEAR(merged.model.ground_offset, 0.0, 0.01);
-  for (std::size_t i = 0; i < merged.model.augmented_begin; ++i) {
-    if (merged.model.types[i] != QuadricType::CircularCylinder) continue;
-    const QuadricDecomposition shape = merged.model.records[i].quadric().decompose();
-    EXPECT_NEAR(shape.scale.x(), 0.5, 0.02);
-    EXPECT_GT(std::abs(shape.rotation.col(2).x()), 0.999);  // the axis runs along x
-    // One primitive holds the pipe's points from both tiles (its 9.4k points, not half of them).
-    EXPECT_GT(merged.model.element_point_counts[i], 0.9 * 150.0 * 2.0 * kPi * 0.5 * 20.0);
-  }
+  expect_the_whole_pipe(merged.model);
 }
 
 TEST_F(TiledModelling, AnySplitIntoTileGroupsGivesTheSameModel) {
@@ -123,22 +153,9 @@ TEST_F(TiledModelling, AnySplitIntoTileGroupsGivesTheSameModel) {
   MatrixChunkSource source(points, "scene");
   tiling.tile_size = 6.0;  // four tiles across x: borders at x = -6, 0 and 6 cut the pipe, the wall and the floor
   const ModellingResult small_tiles = model_tiled(source, scene_extraction(), scene_modelling(), tiling);
-  std::vector<PartialModel> parts;
-  for (int group = 0; group < 3; ++group) {
-    TilingOptions split = tiling;
-    split.group = group;
-    split.groups = 3;
-    const std::string path = (folder / ("part" + std::to_string(group) + ".tiles")).string();
-    write_partial_model(path, model_tile_group(source, scene_extraction(), split));
-    parts.push_back(read_partial_model(path));
-  }
+  std::vector<PartialModel> parts = model_in_three_groups(source);
   const ModellingResult split = merge_partial_models(parts, scene_extraction(), scene_modelling());
-  ASSERT_EQ(split.model.size(), small_tiles.model.size());
-  for (std::size_t i = 0; i < split.model.size(); ++i) {
-    EXPECT_EQ(split.model.types[i], small_tiles.model.types[i]);
-    const auto a = split.model.records[i].to_array(), b = small_tiles.model.records[i].to_array();
-    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-9) << "record " << i << " value " << k;
-  }
+  expect_same_records(split.model, small_tiles.model);
   // Four pieces of each merge back into one pipe, one wall and the ground.
   EXPECT_EQ(type_counts(small_tiles.model)[QuadricType::CircularCylinder], 1);
   EXPECT_EQ(type_counts(small_tiles.model)[QuadricType::Plane], 2);
@@ -170,31 +187,12 @@ TEST_F(TiledModelling, TilesSplitByPointCountHoldAtMostTheTargetAndMergeBack) {
   EXPECT_EQ(type_counts(merged.model)[QuadricType::CircularCylinder], 1);
   EXPECT_EQ(type_counts(merged.model)[QuadricType::Plane], 2);
   EXPECT_TRUE(merged.model.has_ground);
-  for (std::size_t i = 0; i < merged.model.augmented_begin; ++i) {
-    if (merged.model.types[i] != QuadricType::CircularCylinder) continue;
-    const QuadricDecomposition shape = merged.model.records[i].quadric().decompose();
-    EXPECT_NEAR(shape.scale.x(), 0.5, 0.02);
-    EXPECT_GT(std::abs(shape.rotation.col(2).x()), 0.999);
-    EXPECT_GT(merged.model.element_point_counts[i], 0.9 * 150.0 * 2.0 * kPi * 0.5 * 20.0);
-  }
+  expect_the_whole_pipe(merged.model);
 
-  std::vector<PartialModel> parts;
-  for (int group = 0; group < 3; ++group) {
-    TilingOptions split = tiling;
-    split.group = group;
-    split.groups = 3;
-    const std::string path = (folder / ("part" + std::to_string(group) + ".tiles")).string();
-    write_partial_model(path, model_tile_group(source, scene_extraction(), split));
-    parts.push_back(read_partial_model(path));
-    EXPECT_EQ(parts.back().tile_points, part.tile_points);
-  }
+  std::vector<PartialModel> parts = model_in_three_groups(source);
+  for (const PartialModel& group : parts) EXPECT_EQ(group.tile_points, part.tile_points);
   const ModellingResult split = merge_partial_models(parts, scene_extraction(), scene_modelling());
-  ASSERT_EQ(split.model.size(), merged.model.size());
-  for (std::size_t i = 0; i < split.model.size(); ++i) {
-    EXPECT_EQ(split.model.types[i], merged.model.types[i]);
-    const auto a = split.model.records[i].to_array(), b = merged.model.records[i].to_array();
-    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-9) << "record " << i << " value " << k;
-  }
+  expect_same_records(split.model, merged.model);
   // Parts of a different split of the tiles do not merge with these.
   TilingOptions other = tiling;
   other.tile_points = tiling.tile_points / 2;
