@@ -203,9 +203,9 @@ struct DriftedWalk {
   std::vector<PoseRow> truth;
 };
 
-DriftedWalk drifted_balm(const fs::path& folder, unsigned seed, std::size_t first, std::size_t count, double yaw_bias_degrees,
-                         bool with_odometry = true) {
-  const std::string root = testing::shared_data_path("balm_sequence");
+/// The shared BALM walk's scans and true poses (poses.txt: a cloud name and 12 numbers a line, the
+/// rotation made orthonormal), in walk order.
+std::vector<std::pair<std::string, Eigen::Isometry3d>> read_balm_walk(const std::string& root) {
   std::ifstream poses(root + "/poses.txt");
   std::vector<std::pair<std::string, Eigen::Isometry3d>> walk;
   std::string line;
@@ -221,6 +221,22 @@ DriftedWalk drifted_balm(const fs::path& folder, unsigned seed, std::size_t firs
     pose.translation() = matrix.col(3);
     walk.emplace_back(name, pose);
   }
+  return walk;
+}
+
+/// Writes every `stride`-th point of the cloud `source` to `destination` (a shorter test, same geometry).
+void write_thinned(const std::string& source, const std::string& destination, Eigen::Index stride) {
+  const PointCloud cloud = read_point_cloud(source);
+  PointCloud thinned;
+  thinned.positions.resize(3, (static_cast<Eigen::Index>(cloud.size()) + stride - 1) / stride);
+  for (Eigen::Index k = 0; k < thinned.positions.cols(); ++k) thinned.positions.col(k) = cloud.positions.col(stride * k);
+  write_point_cloud(destination, thinned);
+}
+
+DriftedWalk drifted_balm(const fs::path& folder, unsigned seed, std::size_t first, std::size_t count, double yaw_bias_degrees,
+                         bool with_odometry = true) {
+  const std::string root = testing::shared_data_path("balm_sequence");
+  const std::vector<std::pair<std::string, Eigen::Isometry3d>> walk = read_balm_walk(root);
   std::mt19937 random(seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   std::ostringstream list;
@@ -307,11 +323,7 @@ ScanList two_session_walk(const fs::path& folder, std::size_t with_odometry, std
     std::string name, pose;
     fields >> name;
     std::getline(fields, pose);
-    PointCloud cloud = read_point_cloud(root + "/" + name);
-    PointCloud thinned;
-    thinned.positions.resize(3, static_cast<Eigen::Index>((cloud.size() + 1) / 2));
-    for (Eigen::Index k = 0; k < thinned.positions.cols(); ++k) thinned.positions.col(k) = cloud.positions.col(2 * k);
-    write_point_cloud((folder / (name + ".ply")).string(), thinned);
+    write_thinned(root + "/" + name, (folder / (name + ".ply")).string(), 2);
     const bool odometry = index < 6 + with_odometry;
     list << (odometry ? "a" : "b") << "\t" << name << ".ply\t" << (odometry ? pose.substr(1) : "-") << "\n";
   }
@@ -419,7 +431,6 @@ TEST(MappingExecutor, AnotherExecutorSeesTheBatchesAndGivesTheSameMap) {
 /// third. `truth` in the map frame (a's).
 DriftedWalk interleaved_sessions(const fs::path& folder, double yaw_bias_degrees, unsigned seed) {
   const std::string root = testing::shared_data_path("balm_sequence");
-  std::ifstream poses(root + "/poses.txt");
   std::ostringstream list;
   list << "session\tscan\todometry\n";
   std::mt19937 random(seed);
@@ -428,26 +439,10 @@ DriftedWalk interleaved_sessions(const fs::path& folder, double yaw_bias_degrees
   own_frame.linear() = Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   own_frame.translation() = Eigen::Vector3d(30.0, -12.0, 2.0);
   DriftedWalk result;
-  std::vector<std::pair<std::string, Eigen::Isometry3d>> walk;
-  std::string line;
-  for (std::size_t index = 0; std::getline(poses, line) && index < 22; ++index) {
-    if (index < 6) continue;  // the walk stands still at first
-    std::istringstream fields(line);
-    std::string name;
-    fields >> name;
-    Eigen::Matrix<double, 3, 4> matrix;
-    for (int k = 0; k < 12; ++k) fields >> matrix(k / 4, k % 4);
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(matrix.leftCols<3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
-    pose.linear() = svd.matrixU() * svd.matrixV().transpose();
-    pose.translation() = matrix.col(3);
-    PointCloud cloud = read_point_cloud(root + "/" + name);
-    PointCloud thinned;
-    thinned.positions.resize(3, static_cast<Eigen::Index>((cloud.size() + 2) / 3));
-    for (Eigen::Index k = 0; k < thinned.positions.cols(); ++k) thinned.positions.col(k) = cloud.positions.col(3 * k);
-    write_point_cloud((folder / (name + ".ply")).string(), thinned);
-    walk.emplace_back(name, pose);
-  }
+  const std::vector<std::pair<std::string, Eigen::Isometry3d>> whole = read_balm_walk(root);
+  // Scans 6-21: the walk stands still at first.
+  const std::vector<std::pair<std::string, Eigen::Isometry3d>> walk(whole.begin() + 6, whole.begin() + std::min<std::size_t>(22, whole.size()));
+  for (const auto& [name, pose] : walk) write_thinned(root + "/" + name, (folder / (name + ".ply")).string(), 3);
   for (const std::string session : {"a", "b"}) {
     Eigen::Isometry3d odometry = Eigen::Isometry3d::Identity();
     std::size_t previous = walk.size();
