@@ -724,15 +724,16 @@ void run(const ModelCommandOptions& options) {
   const PointCloud cloud = read_merged_clouds(options, read_options);
   // A cloud in a map's frame is modelled centred on its sensor (the extraction measures ranges and
   // heights from the origin), and the model is moved back: every output is in the file's frame.
-  const PointCloud centred_cloud = centred ? centred_on_sensor(cloud, sensor_origin) : PointCloud();
-  if (centred) require_finite_points(centred_cloud, "--sensor-origin moved " + options.inputs.front());
-  const PointCloud& file_units = centred ? centred_cloud : cloud;
-  PointCloud metric_cloud;
-  if (rescaled) {
-    metric_cloud = file_units;
-    metric_cloud.positions *= static_cast<float>(units.metres_per_unit);
+  // One copy at most, centred and/or in metres; `cloud` stays in the file's frame and unit.
+  PointCloud moved;
+  if (centred) {
+    moved = centred_on_sensor(cloud, sensor_origin);
+    require_finite_points(moved, "--sensor-origin moved " + options.inputs.front());
+  } else if (rescaled) {
+    moved = cloud;
   }
-  const PointCloud& modelled = rescaled ? metric_cloud : file_units;
+  if (rescaled) moved.positions *= static_cast<float>(units.metres_per_unit);
+  const PointCloud& modelled = centred || rescaled ? moved : cloud;
   // The library's preset resolution (as `register` and Python's model() do it): a named preset, or
   // auto measured on the cloud (its up axis and platform crop set on the extraction), then --config.
   std::string notes;
