@@ -343,20 +343,19 @@ def _map_register_task(from_entry, to_entry, kind, guess, from_model, to_model, 
         const py::dict options_dict = keywords;
         const MapOptions options = map_options_from(options_dict);
         const ScanList list = scan_list_from(scans);
+        const std::string truth_path = gt.is_none() ? std::string() : path_from_object(gt);
         std::vector<PoseRow> truth;
-        if (!gt.is_none()) {
-          const std::string path = path_from_object(gt);
-          require_existing_file(path);
-          truth = read_pose_table(path);
+        if (!truth_path.empty()) {
+          require_existing_file(truth_path);
+          truth = read_pose_table(truth_path);
         }
         // The folder is checked before the work and replaced whole at the end, as `quadrix map --out`
         // does: a failure midway leaves the earlier folder as it was.
         std::optional<FolderReplacement> out_folder;
         const std::string out_path = out.is_none() ? std::string() : path_from_object(out);
-        if (!out.is_none()) {
-          std::vector<std::string> inputs;
+        if (!out_path.empty()) {
+          std::vector<std::string> inputs = {truth_path};
           for (const ScanEntry& scan : list.scans) inputs.push_back(scan.path);
-          if (!gt.is_none()) inputs.push_back(path_from_object(gt));
           out_folder.emplace("out", out_path, map_folder_names(), inputs);
         }
         auto run = std::make_shared<MapRun>();
