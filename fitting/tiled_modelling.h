@@ -56,6 +56,25 @@ class MatrixChunkSource : public PointChunkSource {
   Eigen::Index next_ = 0;
 };
 
+/// Another source's points multiplied by `factor`: a survey in feet served in metres, the unit of
+/// every preset's lengths (the model is scaled back by 1 / factor before it is written).
+class ScaledChunkSource : public PointChunkSource {
+ public:
+  /// `points` is kept by reference and must outlive the source.
+  ScaledChunkSource(PointChunkSource& points, double factor) : points_(points), factor_(factor) {}
+  bool next_chunk(Eigen::Matrix3Xd& chunk, std::size_t maximum) override {
+    if (!points_.next_chunk(chunk, maximum)) return false;
+    chunk *= factor_;
+    return true;
+  }
+  void rewind() override { points_.rewind(); }
+  std::string name() const override { return points_.name(); }
+
+ private:
+  PointChunkSource& points_;
+  double factor_;
+};
+
 /// Point-cloud files read chunk by chunk (geometry/point_stream.h) in the file's coordinates
 /// (double: georeferenced coordinates keep their precision), each moved by its pose into one frame
 /// (TLS stations). Only one file and one chunk are held at once, so memory does not grow with the

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 
 namespace quadrix {
@@ -456,6 +457,33 @@ LasHeader read_las_header(const std::string& path) {
   }
   io_internal::check_variable_length_records(path, file, header);
   return header;
+}
+
+CoordinateUnits coordinate_units(const std::string& path, CloudFormat format) {
+  CoordinateUnits units;
+  if (format == CloudFormat::Auto) {
+    try {
+      units.las = cloud_format_from_path(path) == CloudFormat::Las;
+    } catch (const Error&) {
+      return units;  // the read names the unknown extension
+    }
+  } else {
+    units.las = format == CloudFormat::Las;
+  }
+  if (!units.las || !std::filesystem::is_regular_file(path)) return units;  // a missing file: the read names it
+  const LasUnits declared = read_las_header(path).units;
+  if (declared.geographic)
+    throw file_error(path, "its coordinates are longitude and latitude in degrees (a geographic CRS); quadrix models "
+                           "lengths: reproject it to a projected CRS first (e.g. pdal translate with filters.reprojection)");
+  if (declared.horizontal_metres > 0.0) {
+    units.metres_per_unit = declared.horizontal_metres;
+    units.name = declared.horizontal_name;
+    units.source = "LAS " + declared.source;
+  }
+  if (declared.vertical_metres > 0.0 && std::abs(declared.vertical_metres - units.metres_per_unit) > 1e-9 * units.metres_per_unit)
+    throw file_error(path, "its CRS declares x and y in " + units.name + " but z in " + declared.vertical_name +
+                           ": mixed units are not modelled (convert z to the x and y unit first)");
+  return units;
 }
 
 }  // namespace quadrix

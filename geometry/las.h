@@ -2,6 +2,8 @@
 // Point data is read with read_point_cloud (geometry/io.h) or open_point_stream (geometry/point_stream.h).
 #pragma once
 
+#include "geometry/io.h"
+
 #include <Eigen/Core>
 
 #include <array>
@@ -55,5 +57,21 @@ inline constexpr std::array<std::size_t, 11> kLasBaseRecordSize = {20, 28, 26, 3
 /// quadrix::Error naming the file and the field; a LAZ file (compressed point format or LASzip
 /// record) gets an error naming laszip and pdal translate, which decompress it.
 LasHeader read_las_header(const std::string& path);
+
+/// The length unit of a point-cloud file's coordinates, as modelling needs it: every preset's
+/// lengths are metres, so a cloud in another unit is modelled scaled to metres and its model is
+/// written back in the file's unit.
+struct CoordinateUnits {
+  double metres_per_unit = 1.0;  ///< 1: metres, declared or assumed
+  std::string name = "metre";    ///< as the file declares it ("foot", "US survey foot", ...)
+  std::string source;            ///< "LAS GeoTIFF keys", "LAS WKT", or empty (nothing declared: metres assumed)
+  bool las = false;              ///< the file is LAS, so its labels are ASPRS classes
+};
+
+/// The unit of `path`'s coordinates: what a LAS file's CRS records declare (LasHeader::units: feet in
+/// most US state-plane surveys); metres for every other format (`format` Auto: by extension) and
+/// for a LAS file that declares none. Throws quadrix::Error naming the file for a geographic CRS
+/// (degrees are not lengths) and for z declared in another unit than x and y.
+CoordinateUnits coordinate_units(const std::string& path, CloudFormat format = CloudFormat::Auto);
 
 }  // namespace quadrix

@@ -7,6 +7,7 @@
 #include "estimation/registration_config.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "geometry/las.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -33,7 +34,17 @@ void run(const ConfigCommandOptions& options) {
   // auto without a cloud: auto chooses per cloud, so the defaults shown are those it starts from
   // (the library's choice for a cloud with nothing to measure), with the rule it applies.
   const bool auto_without_cloud = options.preset == "auto" && options.cloud.empty();
-  const PointCloud cloud = options.cloud.empty() ? PointCloud{} : read_point_cloud(options.cloud);
+  // As `quadrix model` reads one cloud: relative to a local origin, and in metres (a LAS file in feet
+  // is scaled), so auto measures what model and register measure.
+  PointCloud cloud;
+  CoordinateUnits units;
+  if (!options.cloud.empty()) {
+    units = coordinate_units(options.cloud);
+    CloudReadOptions read_options;
+    read_options.local_origin = LocalOrigin::Auto;
+    cloud = read_point_cloud(options.cloud, read_options);
+    cloud.positions *= static_cast<float>(units.metres_per_unit);
+  }
   std::string notes;
   RegistrationOptions registration = auto_without_cloud
                                          ? registration_preset(guess_sensor_preset(PointCloud{}).preset)
@@ -52,6 +63,9 @@ void run(const ConfigCommandOptions& options) {
     std::printf("# quadrix config: preset %s%s%s%s\n", options.preset == "auto" ? "auto -> " : "",
                 registration.source_extraction.preset.c_str(), options.cloud.empty() ? "" : " for ", options.cloud.c_str());
   }
+  if (units.metres_per_unit != 1.0)
+    std::printf("# %s is in %s (%.10g m, declared by its %s): measured in metres; every length below is metres\n",
+                options.cloud.c_str(), units.name.c_str(), units.metres_per_unit, units.source.c_str());
   if (!notes.empty()) std::printf("# %s\n", notes.c_str());
   std::printf("%s", registration_config_yaml(registration).c_str());
 }

@@ -198,14 +198,10 @@ std::string human_bytes(double bytes) {
   return buffer;
 }
 
-// The length unit of the inputs' coordinates. A LAS file's CRS records may declare one
-// (LasHeader::units: feet in most US state-plane surveys); every other file, and a LAS file that
-// declares none, is taken to be in metres, the unit every preset's lengths are in.
-struct InputUnits {
-  double metres_per_unit = 1.0;  // 1: metres, declared or assumed
-  std::string name = "metre";    // as the file declares it ("foot", "US survey foot", ...)
-  std::string source;            // "LAS GeoTIFF keys", "LAS WKT", or "" (nothing declared: metres assumed)
-  bool all_las = false;          // every input is LAS, so its labels are ASPRS classes
+// The length unit of the inputs' coordinates (coordinate_units: a LAS file may declare feet; every
+// other file is in metres, the unit every preset's lengths are in), one for all inputs.
+struct InputUnits : CoordinateUnits {
+  bool all_las = false;  // every input is LAS, so its labels are ASPRS classes
 };
 
 InputUnits input_units(const ModelCommandOptions& options, CloudFormat format) {
@@ -213,38 +209,12 @@ InputUnits input_units(const ModelCommandOptions& options, CloudFormat format) {
   units.all_las = true;
   for (std::size_t i = 0; i < options.inputs.size(); ++i) {
     const std::string& path = options.inputs[i];
-    bool las = format == CloudFormat::Las;
-    if (format == CloudFormat::Auto) {
-      try {
-        las = cloud_format_from_path(path) == CloudFormat::Las;
-      } catch (const Error&) {
-        las = false;  // the read names the unknown extension
-      }
-    }
-    units.all_las = units.all_las && las;
-    InputUnits found;
-    if (las && std::filesystem::is_regular_file(path)) {
-      const LasUnits declared = read_las_header(path).units;
-      if (declared.geographic)
-        throw file_error(path, "its coordinates are longitude and latitude in degrees (a geographic CRS); quadrix models "
-                               "lengths: reproject it to a projected CRS first (e.g. pdal translate with filters.reprojection)");
-      if (declared.horizontal_metres > 0.0) {
-        found.metres_per_unit = declared.horizontal_metres;
-        found.name = declared.horizontal_name;
-        found.source = "LAS " + declared.source;
-      }
-      if (declared.vertical_metres > 0.0 && std::abs(declared.vertical_metres - found.metres_per_unit) > 1e-9 * found.metres_per_unit)
-        throw file_error(path, "its CRS declares x and y in " + found.name + " but z in " + declared.vertical_name +
-                               ": mixed units are not modelled (convert z to the x and y unit first)");
-    }
+    const CoordinateUnits found = coordinate_units(path, format);
     if (i > 0 && std::abs(found.metres_per_unit - units.metres_per_unit) > 1e-9 * units.metres_per_unit)
       throw file_error(path, "its coordinates are in " + found.name + ", those of " + options.inputs.front() + " in " +
                              units.name + ": inputs merged into one cloud need one unit");
-    if (i == 0) {
-      const bool all_las = units.all_las;
-      units = found;
-      units.all_las = all_las;
-    }
+    if (i == 0) static_cast<CoordinateUnits&>(units) = found;
+    units.all_las = units.all_las && found.las;
   }
   return units;
 }
@@ -529,12 +499,13 @@ std::string input_name(const ModelCommandOptions& options) {
 // Writes a merged tiled model (--out JSON, --binary) and prints its summary.
 void write_tiled_model(const std::string& out, const std::string& binary, const std::string& source, std::size_t inputs,
                        const std::string& preset, const std::string& fitter, const ModellingResult& result,
-                       const std::string& tiling_json) {
+                       const std::string& tiling_json, const std::string& more_members = "") {
   const SceneModel& model = result.model;
   const auto counts = quadric_counts_of(model);
   std::string extra = "\"input\": " + nlohmann::json(source).dump() + ", \"inputs\": " + std::to_string(inputs) +
                       ", \"preset\": \"" + preset + "\", \"fitter\": \"" + fitter + "\", \"status\": \"" +
-                      modelling_status_name(result.status) + "\", \"tiling\": " + tiling_json;
+                      modelling_status_name(result.status) + "\", \"tiling\": " + tiling_json +
+                      (more_members.empty() ? "" : ", " + more_members);
   write_scene_model_json(out, model, extra);
   if (!binary.empty()) write_scene_model_binary(binary, model);
   std::printf("quadrix model %s  (%zu points, tile by tile, preset %s, fitter %s)\n", source.c_str(), model.source_point_count,
@@ -552,15 +523,25 @@ void write_tiled_model(const std::string& out, const std::string& binary, const 
 }
 
 // A static scan tile by tile: the whole model, or with --tile i/n the partial model of one group.
+// Coordinates in another unit than metres (`units`) are tiled and modelled scaled to metres, and
+// the model is written back in the file's unit.
 void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction, const ModellingOptions& modelling,
-               PointChunkSource& points, const Eigen::Vector3d& sensor_origin, TilingOptions tiling) {
+               PointChunkSource& file_points, const Eigen::Vector3d& sensor_origin, TilingOptions tiling,
+               const InputUnits& units) {
   for (const auto& [flag, value] : std::initializer_list<std::pair<const char*, const std::string*>>{
            {"--labels", &options.labels}, {"--score-labels", &options.score_labels}, {"--mesh", &options.mesh},
            {"--elements", &options.elements}, {"--picture", &options.picture}})
     if (!value->empty())
       throw Error(std::string(flag) + ": not available tile by tile (it needs every element's points in memory); "
                   "model whole with a larger --memory-budget");
-  extraction.sensor_origin = sensor_origin;  // tiles are modelled relative to their corners, in the file's frame
+  const bool rescaled = units.metres_per_unit != 1.0;
+  if (rescaled && tiling.groups > 1)
+    throw Error(options.inputs.front() + ": coordinates in " + units.name + " are modelled in metres; --tile i/n parts " +
+                "of a survey in another unit are not joined: model it in one process (tiles in parallel on this machine's cores)");
+  ScaledChunkSource metric_points(file_points, units.metres_per_unit);
+  PointChunkSource& points = rescaled ? static_cast<PointChunkSource&>(metric_points) : file_points;
+  // Tiles are modelled relative to their corners, in the file's frame (scaled to metres).
+  extraction.sensor_origin = sensor_origin * units.metres_per_unit;
   tiling.progress = terminal_progress();
   const std::string source = points.name();
   if (tiling.groups > 1) {
@@ -580,19 +561,23 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
   const double tiles_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (tiling.progress) tiling.progress({3, 0, 0, part.tiles, part.tiles, 0.0});
   ModellingResult result = merge_partial_models({part}, extraction, modelling, tiling);
+  if (rescaled) result.model = scaled(std::move(result.model), 1.0 / units.metres_per_unit);
   result.model.timings_ms["tiles"] = tiles_ms;
   result.model.timings_ms["total"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json tiling_json = {{"tile_size", part.tile_size}, {"tile_size_requested", tiling.tile_size},
                                       {"tile_points", part.tile_points}, {"largest_tile", part.largest_tile},
                                       {"tiles", part.tiles}, {"margin", tiling.margin}, {"memory_budget", tiling.memory_budget}};
   write_tiled_model(options.out, options.binary, source, options.inputs.size(), extraction.preset, modelling.fitter, result,
-                    tiling_json.dump());
+                    tiling_json.dump(), units_json(units));
   if (part.tile_points > 0)
     std::printf("tiles: %llu split by point count (at most %llu points, largest %llu) on a %.1f m grid, margin %.1f m\n",
                 static_cast<unsigned long long>(part.tiles), static_cast<unsigned long long>(part.tile_points),
                 static_cast<unsigned long long>(part.largest_tile), part.tile_size, tiling.margin);
   else
     std::printf("tiles: %llu of %.1f m, margin %.1f m\n", static_cast<unsigned long long>(part.tiles), part.tile_size, tiling.margin);
+  if (rescaled)
+    std::printf("units: the file is in %s (%.10g m, declared by its %s): modelled in metres (as are the tile sizes above), written in %s\n",
+                units.name.c_str(), units.metres_per_unit, units.source.c_str(), units.name.c_str());
 }
 
 // The files of a static scan streamed from disk when it is modelled tile by tile, so the scan is
@@ -698,17 +683,11 @@ void run(const ModelCommandOptions& options) {
   // the model is written back in the file's unit.
   const InputUnits units = input_units(options, read_options.format);
   const bool rescaled = units.metres_per_unit != 1.0;
-  const auto refuse_tiles_in_other_units = [&] {
-    if (rescaled)
-      throw Error(options.inputs.front() + ": coordinates in " + units.name +
-                  " are modelled whole (in metres), not tile by tile; raise --memory-budget and leave out --tile-size and --tile");
-  };
   {
     // A static scan tiled from its files: never read whole.
     RegistrationOptions registration;
     std::string notes;
     if (const std::unique_ptr<FileChunkSource> files = streamed_static_scan(options, tiling, registration, notes)) {
-      refuse_tiles_in_other_units();
       ExtractionOptions extraction = registration.source_extraction;
       if (options.plane_method == "cgal") extraction.planes.method = PlaneMethod::CgalRegionGrowing;
       ModellingOptions modelling = registration.modelling;
@@ -717,7 +696,7 @@ void run(const ModelCommandOptions& options) {
       // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
       modelling.quadrics_per_class = std::numeric_limits<int>::max();
       if (options.verbose && !notes.empty()) std::printf("%s\n", notes.c_str());
-      run_tiled(options, extraction, modelling, *files, sensor_origin, tiling);
+      run_tiled(options, extraction, modelling, *files, sensor_origin, tiling, units);
       return;
     }
   }
@@ -753,10 +732,9 @@ void run(const ModelCommandOptions& options) {
     // K_e bounds registration's cost; a static scan modelled for itself keeps every primitive it finds.
     modelling.quadrics_per_class = std::numeric_limits<int>::max();
     if (options.tile_size > 0.0 || !options.tile.empty() || tiling_needed(cloud.size(), tiling)) {
-      refuse_tiles_in_other_units();
       // Served in the file's frame (the cloud was read relative to its local origin).
       MatrixChunkSource points(cloud.positions, input_name(options), cloud.local_origin);
-      run_tiled(options, extraction, modelling, points, sensor_origin, tiling);
+      run_tiled(options, extraction, modelling, points, sensor_origin, tiling, units);
       return;
     }
   }

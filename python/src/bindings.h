@@ -5,6 +5,8 @@
 
 #include "estimation/registration.h"
 #include "fitting/scene_model.h"
+#include "geometry/io.h"
+#include "geometry/las.h"
 #include "geometry/point_cloud.h"
 
 #include <pybind11/numpy.h>
@@ -24,8 +26,9 @@ namespace py = pybind11;
 /// A point cloud owned by Python (`quadrix.Cloud`): positions and the optional per-point fields.
 /// Shared so that arrays handed out as views keep it alive.
 struct Cloud {
-  PointCloud cloud;    ///< the cloud as Quadrix reads and registers it
-  std::string source;  ///< file it was read from ("" when built from arrays)
+  PointCloud cloud;        ///< the cloud as Quadrix reads and registers it
+  std::string source;      ///< file it was read from ("" when built from arrays)
+  CoordinateUnits units;   ///< the file's length unit (a LAS file may declare feet); metres for arrays
 };
 
 /// A scene model owned by Python (`quadrix.Model`).
@@ -47,9 +50,10 @@ Eigen::Matrix3Xf positions_from_array(const py::handle& points, const char* what
 
 /// The cloud behind `value`: a quadrix.Cloud (used in place, no copy), a path (str or os.PathLike,
 /// read with read_point_cloud; FileNotFoundError when it does not exist), or an (N, 3) array.
-/// `holder` keeps a cloud built here alive while the returned reference is used.
+/// `holder` keeps a cloud built here alive while the returned reference is used (and holds the
+/// cloud's units). A path is read with `local_origin` (Auto keeps georeferenced coordinates exact).
 const PointCloud& cloud_from_object(const py::handle& value, const char* what, std::shared_ptr<Cloud>& holder,
-                                    std::string* path = nullptr);
+                                    std::string* path = nullptr, LocalOrigin local_origin = LocalOrigin::Zero);
 
 /// Optional per-point uint32 labels (None -> empty); ValueError when the length is not `expected`.
 std::vector<std::uint32_t> labels_from_object(const py::handle& value, std::size_t expected, const char* what);

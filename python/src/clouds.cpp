@@ -125,7 +125,7 @@ void require_writable_location(const std::string& path) {
 }
 
 const PointCloud& cloud_from_object(const py::handle& value, const char* what, std::shared_ptr<Cloud>& holder,
-                                    std::string* path) {
+                                    std::string* path, LocalOrigin local_origin) {
   if (py::isinstance<Cloud>(value)) {
     holder = value.cast<std::shared_ptr<Cloud>>();
     if (path) *path = holder->source;
@@ -137,7 +137,10 @@ const PointCloud& cloud_from_object(const py::handle& value, const char* what, s
     require_existing_file(holder->source);
     if (path) *path = holder->source;
     py::gil_scoped_release release;
-    holder->cloud = read_point_cloud(holder->source);
+    holder->units = coordinate_units(holder->source);
+    CloudReadOptions options;
+    options.local_origin = local_origin;
+    holder->cloud = read_point_cloud(holder->source, options);
     return holder->cloud;
   }
   holder->cloud.positions = positions_from_array(value, what);
@@ -209,7 +212,7 @@ The array properties are read-only views of the cloud's memory (copy them to mod
             const Cloud& cloud = self.cast<const Cloud&>();
             return view<float>(self, cloud.cloud.positions.data(), cloud.cloud.size(), 3);
           },
-          "(N, 3) float32 positions in metres (read-only view).")
+          "(N, 3) float32 positions in the file's unit (``units``: metres unless a LAS file declares another), relative to ``local_origin`` (read-only view).")
       .def_property_readonly(
           "intensity",
           [](py::object self) -> py::object {
@@ -245,6 +248,22 @@ The array properties are read-only views of the cloud's memory (copy them to mod
           },
           "Other scalar per-point fields the file carried, name -> (N,) float32 array.")
       .def_readonly("source", &Cloud::source, "The file the cloud was read from ('' when built from arrays).")
+      .def_property_readonly(
+          "local_origin",
+          [](const Cloud& cloud) {
+            return std::vector<double>{cloud.cloud.local_origin.x(), cloud.cloud.local_origin.y(), cloud.cloud.local_origin.z()};
+          },
+          "[x, y, z] in the file's coordinates that ``points`` are relative to (0 0 0 unless read with local_origin='auto').")
+      .def_property_readonly(
+          "units",
+          [](const Cloud& cloud) {
+            py::dict units;
+            units["name"] = cloud.units.name;
+            units["metres_per_unit"] = cloud.units.metres_per_unit;
+            units["declared_by"] = cloud.units.source.empty() ? "nothing (metres assumed)" : cloud.units.source;
+            return units;
+          },
+          "The length unit of the coordinates {name, metres_per_unit, declared_by}: what a LAS file's CRS declares, else metres.")
       .def("__len__", [](const Cloud& cloud) { return cloud.cloud.size(); }, "Number of points.")
       .def("__repr__", [](const Cloud& cloud) {
         std::string fields;
@@ -258,23 +277,32 @@ The array properties are read-only views of the cloud's memory (copy them to mod
 
   module.def(
       "read_cloud",
-      [](const py::object& path, const std::string& format) {
+      [](const py::object& path, const std::string& format, const std::string& local_origin) {
         auto cloud = std::make_shared<Cloud>();
         cloud->source = path_from_object(path);
         require_existing_file(cloud->source);
         CloudReadOptions options;
         options.format = cloud_format_from_name(format);
+        if (local_origin == "auto")
+          options.local_origin = LocalOrigin::Auto;
+        else if (local_origin != "zero")
+          throw Error("read_cloud: local_origin must be 'zero' or 'auto', got '" + local_origin + "'");
         py::gil_scoped_release release;
+        cloud->units = coordinate_units(cloud->source, options.format);
         cloud->cloud = read_point_cloud(cloud->source, options);
         return cloud;
       },
-      py::arg("path"), py::arg("format") = "auto", R"doc(
+      py::arg("path"), py::arg("format") = "auto", py::arg("local_origin") = "zero", R"doc(
 Reads a point cloud file into a quadrix.Cloud (``.points`` is an (N, 3) float32 array;
 ``.intensity``, ``.labels``, ``.colors`` and ``.fields`` when the file has them).
 
 path: str or os.PathLike. The format follows the extension (.bin KITTI, .pcd.bin nuScenes, .ply,
 .pcd, .xyz/.txt, .csv, .npy) unless ``format`` names one (auto, bin, kitti-bin, nuscenes-bin, ply,
-pcd, xyz, csv, npy). Points with a NaN/inf coordinate are dropped, as in ``quadrix info``.
+pcd, xyz, csv, npy, las). Points with a NaN/inf coordinate are dropped, as in ``quadrix info``.
+local_origin: ``zero`` (positions as in the file; float32 rounds georeferenced coordinates to
+decimetres) or ``auto`` (a round point near the file's centre is subtracted in double first and kept
+as ``Cloud.local_origin``; ``model`` writes its model back in the file's coordinates). The file's
+length unit (a LAS file may declare feet) is kept as ``Cloud.units``.
 
 Raises FileNotFoundError when the file does not exist and ValueError naming the file (and line or
 field) when it cannot be parsed.

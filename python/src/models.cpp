@@ -197,14 +197,25 @@ when it is not a valid model (bad magic, truncation, checksum mismatch, invalid 
       [](const py::object& cloud, const std::string& preset, const py::object& config, const py::object& labels,
          const py::object& fitter, const py::object& sensor_origin) {
         std::shared_ptr<Cloud> holder;
-        const PointCloud& given = cloud_from_object(cloud, "cloud", holder);
+        // A file is read relative to a local origin (georeferenced coordinates stay exact in float32).
+        const PointCloud& given = cloud_from_object(cloud, "cloud", holder, nullptr, LocalOrigin::Auto);
         // As `quadrix model --sensor-origin`: modelled centred on the sensor, the model moved back.
         const Eigen::Vector3d origin = point_from_object(sensor_origin, "sensor_origin");
         const bool centred = !origin.isZero(0.0);
-        const PointCloud centred_cloud = centred ? centred_on_sensor(given, origin) : PointCloud();
-        const PointCloud& points = centred ? centred_cloud : given;
+        // As `quadrix model`: coordinates in another unit (a LAS file in feet) are modelled in metres,
+        // the presets' unit, and the model is returned in the cloud's unit. One copy at most.
+        const double metres_per_unit = holder->units.metres_per_unit;
+        const bool rescaled = metres_per_unit != 1.0;
+        PointCloud moved;
+        if (centred)
+          moved = centred_on_sensor(given, origin);
+        else if (rescaled)
+          moved = given;
+        if (rescaled) moved.positions *= static_cast<float>(metres_per_unit);
+        const PointCloud& points = centred || rescaled ? moved : given;
         RegistrationOptions options = registration_options_from(preset, points, preset, points, config, py::none(), nullptr);
         ExtractionOptions extraction = options.source_extraction;
+        if (!holder->units.las) extraction.ground_class = -1;  // only a LAS file's labels are ASPRS classes
         const std::vector<std::uint32_t> point_labels = labels_from_object(labels, points.size(), "labels");
         if (!point_labels.empty()) extraction.semantic_mode = SemanticMode::Labels;
         if (!fitter.is_none()) options.modelling.fitter = fitter.cast<std::string>();
@@ -215,7 +226,13 @@ when it is not a valid model (bad magic, truncation, checksum mismatch, invalid 
         {
           py::gil_scoped_release release;
           ModellingResult modelling = model_scene(points, extraction, options.modelling, point_labels);
-          result->model = centred ? translated(std::move(modelling.model), origin) : std::move(modelling.model);
+          SceneModel model = std::move(modelling.model);
+          if (rescaled) model = scaled(std::move(model), 1.0 / metres_per_unit);
+          if (centred)
+            model = translated(std::move(model), origin);
+          else if (!given.local_origin.isZero(0.0))
+            model = translated(std::move(model), given.local_origin);
+          result->model = std::move(model);
           result->status = modelling_status_name(modelling.status);
           result->message = std::move(modelling.message);
         }
@@ -236,6 +253,10 @@ labels: optional N SemanticKITTI labels (switches the extraction to the labels s
 constrained, cgal, learned, auto). sensor_origin: where the sensor stood in the cloud's frame, (x, y,
 z) in metres, for a cloud in a map's frame: it is modelled centred on the sensor (``auto`` measures
 it there) and the model is returned in the cloud's frame, as ``quadrix model --sensor-origin``.
+
+A LAS file whose CRS declares another length unit (feet in most US state-plane surveys; a path, or a
+Cloud from ``read_cloud``) is modelled in metres and the model returned in the file's unit and
+coordinates, as ``quadrix model`` does; a LAS file's classification is its ground (``airborne``).
 
 Releases the GIL while modelling. Raises ValueError for an unknown preset or fitter, KeyError for an
 unknown config key.

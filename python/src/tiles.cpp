@@ -51,18 +51,31 @@ ModellingOptions static_modelling(const std::string& preset, const py::object& f
 
 // The points of `cloud` as a chunk source: a file path is streamed from disk chunk by chunk (never
 // held whole; formats that cannot be streamed are read whole), a Cloud or an array is served from
-// memory in its file's frame. `holder` and `points` keep what the source refers to alive.
-std::unique_ptr<PointChunkSource> chunk_source(const py::object& cloud, std::shared_ptr<Cloud>& holder, const PointCloud*& points) {
+// memory in its file's frame. `holder` and `points` keep what the source refers to alive; `units`
+// is the coordinates' length unit (coordinate_units: a LAS file may declare feet).
+std::unique_ptr<PointChunkSource> chunk_source(const py::object& cloud, std::shared_ptr<Cloud>& holder, const PointCloud*& points,
+                                               CoordinateUnits& units) {
   if (py::isinstance<py::str>(cloud) || py::hasattr(cloud, "__fspath__")) {
     const std::string path = path_from_object(cloud);
     try {
-      return std::make_unique<FileChunkSource>(std::vector<std::string>{path});
+      auto source = std::make_unique<FileChunkSource>(std::vector<std::string>{path});
+      units = coordinate_units(path);
+      return source;
     } catch (const Error&) {
       // not streamable (ascii PLY, CSV, NPY) or bad: the whole read reads it or names the problem
     }
   }
-  points = &cloud_from_object(cloud, "cloud", holder);
+  points = &cloud_from_object(cloud, "cloud", holder, nullptr, LocalOrigin::Auto);
+  units = holder->units;
   return std::make_unique<MatrixChunkSource>(points->positions, "cloud", points->local_origin);
+}
+
+// Parts are joined in metres, whatever files they came from: tile groups of a survey in another
+// unit are refused with the reason (model_tiled without a client models it in one process).
+void require_metres_for_parts(const CoordinateUnits& units, const std::string& name) {
+  if (units.metres_per_unit != 1.0)
+    throw Error(name + ": coordinates in " + units.name + " are modelled in metres; tile groups (model_tiles, model_tiled " +
+                "with client=) of a survey in another unit are not joined: use model_tiled without client=");
 }
 
 }  // namespace
@@ -73,7 +86,9 @@ void bind_tiles(py::module_& module) {
       [](const py::object& cloud, int tile, int tiles, const std::string& preset, double tile_size, double margin) {
         std::shared_ptr<Cloud> holder;
         const PointCloud* points = nullptr;
-        const std::unique_ptr<PointChunkSource> source = chunk_source(cloud, holder, points);
+        CoordinateUnits units;
+        const std::unique_ptr<PointChunkSource> source = chunk_source(cloud, holder, points, units);
+        require_metres_for_parts(units, source->name());
         const ExtractionOptions extraction = static_extraction(preset);
         std::string bytes;
         {
@@ -126,15 +141,23 @@ def _model_tiles_task(*arguments):
         if (client.is_none()) {
           std::shared_ptr<Cloud> holder;
           const PointCloud* points = nullptr;
-          const std::unique_ptr<PointChunkSource> source = chunk_source(cloud, holder, points);
+          CoordinateUnits units;
+          const std::unique_ptr<PointChunkSource> source = chunk_source(cloud, holder, points, units);
           const ExtractionOptions extraction = static_extraction(preset);
           const ModellingOptions modelling = static_modelling(preset, fitter);
           py::gil_scoped_release release;
-          return model_of(model_tiled(*source, extraction, modelling, tiling_of(0, 1, tile_size, margin)));
+          // Another unit (a LAS file in feet): tiled and modelled in metres, returned in the file's unit.
+          ScaledChunkSource metric(*source, units.metres_per_unit);
+          const bool rescaled = units.metres_per_unit != 1.0;
+          ModellingResult result = model_tiled(rescaled ? static_cast<PointChunkSource&>(metric) : *source, extraction, modelling,
+                                               tiling_of(0, 1, tile_size, margin));
+          if (rescaled) result.model = scaled(std::move(result.model), 1.0 / units.metres_per_unit);
+          return model_of(std::move(result));
         }
         if (!py::isinstance<py::str>(cloud) && !py::hasattr(cloud, "__fspath__"))
           throw Error("model_tiled: with client=, cloud must be a file path the workers can read");
         const std::string path = std::filesystem::absolute(path_from_object(cloud)).string();
+        require_metres_for_parts(coordinate_units(path), path);
         int groups = 0;
         if (tiles.is_none()) {
           const py::dict workers = client.attr("scheduler_info")()["workers"];
@@ -159,6 +182,8 @@ quadrix.Model.
 client: a dask.distributed Client: the survey is split into ``tiles`` groups of tiles (default two
 per worker), each modelled by ``model_tiles`` as one task on the cluster (``cloud`` must then be a
 file path every worker can read), and merged here. Same model whatever the split.
+A LAS file in another length unit (feet) is tiled and modelled in metres and returned in its unit,
+in one process: with ``client=`` (and in ``model_tiles``) it is refused with the reason.
 )doc");
 }
 

@@ -108,3 +108,24 @@ def test_a_cloud_in_a_map_frame_is_modelled_around_its_sensor_origin(street):
     assert in_map_frame.ground["offset"] == pytest.approx(in_sensor_frame.ground["offset"] - normal @ origin, abs=1e-6)
     with pytest.raises(ValueError, match="sensor_origin"):
         quadrix.model(points.astype(np.float32), preset="vlp64", sensor_origin=[1.0, 2.0])
+
+
+def test_a_las_tile_in_feet_is_modelled_as_the_cli_models_it(tmp_path, shared_data, quadrix_cli):
+    # The real airborne tile declares state-plane feet: model() reads it relative to a local origin,
+    # models it in metres and returns the model in the file's feet, as `quadrix model` does; a Cloud
+    # read with local_origin="auto" carries its units and origin and gives the same model.
+    las = shared_data("als_autzen/autzen_trim.las")
+    from_path = quadrix.model(las, preset="airborne")
+    assert from_path.status == "ok", from_path.message
+    quadrix_cli("model", las, "--preset", "airborne", "--no-page", "--out", tmp_path / "cli.json")
+    cli = json.loads((tmp_path / "cli.json").read_text())
+    assert cli["stats"]["units"]["name"] == "foot"
+    assert from_path.types == [q["type"] for q in cli["quadrics"]]
+    np.testing.assert_allclose(from_path.center, [q["center"] for q in cli["quadrics"]], rtol=0, atol=1e-6)
+    cloud = quadrix.read_cloud(las, local_origin="auto")
+    assert cloud.units["name"] == "foot" and cloud.units["metres_per_unit"] == pytest.approx(0.3048)
+    assert min(abs(cloud.local_origin[0]), abs(cloud.local_origin[1])) > 1e5  # state-plane feet
+    from_cloud = quadrix.model(cloud, preset="airborne")
+    np.testing.assert_array_equal(from_cloud.records, from_path.records)
+    with pytest.raises(ValueError, match="local_origin"):
+        quadrix.read_cloud(las, local_origin="centre")

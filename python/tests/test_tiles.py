@@ -58,3 +58,20 @@ def test_dask_local_cluster_gives_the_same_model(scene_file):
     assert result["cluster"]["types"] == result["process"]["types"]
     np.testing.assert_allclose(result["cluster"]["records"], result["process"]["records"], rtol=0, atol=1e-9)
     assert result["process"]["types"].count("circular_cylinder") == 1
+
+
+def test_a_las_tile_in_feet_is_tiled_in_metres_in_one_process(shared_data):
+    # Tiles are cut and modelled in metres (tile_size is metres) and the model is returned in the
+    # file's feet: the model's primitives lie inside the file's own bounds. Tile groups for separate
+    # processes are refused, as their parts are joined in metres whatever file they came from.
+    las = shared_data("als_autzen/autzen_trim.las")
+    model = quadrix.model_tiled(las, preset="airborne", tile_size=150.0)
+    assert model.status == "ok", model.message
+    assert model.quadric_count > 10
+    cloud = quadrix.read_cloud(las)
+    low, high = cloud.points.min(axis=0), cloud.points.max(axis=0)
+    inside = np.all((model.center[: model.quadric_count, :2] >= low[:2] - 1.0) &
+                    (model.center[: model.quadric_count, :2] <= high[:2] + 1.0), axis=1)
+    assert inside.mean() > 0.9, model.center[: model.quadric_count]
+    with pytest.raises(ValueError, match="foot"):
+        quadrix.model_tiles(las, 0, 2, preset="airborne")

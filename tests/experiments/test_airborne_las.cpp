@@ -201,28 +201,14 @@ void write_feet_las(const std::string& path, const std::vector<ScenePoint>& poin
   testing::write_bytes(path, testing::las_test_bytes(file));
 }
 
-// The synthetic nadir scene in feet: every roof facet is a plane of the model at its place (normal
-// within 2 degrees, the facet's centre within 0.1 m of the plane, the plane's centre over the facet),
-// the ground is the classified ground's plane at its height, and no other plane is found.
-// Tolerances: 2 degrees and 0.1 m are several times the error of a least-squares plane through 80+
-// points with 0.05 m height noise (about 0.3 degrees and 0.01 m), and far below a wrong roof's
-// (the nearest other facet differs by 25 degrees or more).
-TEST(AirborneLas, SyntheticRoofsInFeetAreFoundInFileCoordinates) {
-  const Folder folder("quadrix_airborne_synthetic");
-  const std::vector<Facet> roofs = synthetic_roofs();
-  const double noise = 0.05;
-  write_feet_las(folder.file("scene.las"), nadir_scan(roofs, 1.0, noise, 2024));
-  std::string log;
-  const nlohmann::json model = run_model(folder, folder.file("scene.las"), "--preset airborne", "scene", &log);
-  ASSERT_TRUE(model.contains("stats")) << log;
-  const nlohmann::json& stats = model["stats"];
-  EXPECT_EQ(stats["preset"], "airborne");
-  EXPECT_EQ(stats["status"], "ok") << log;
-  EXPECT_EQ(stats["units"]["name"], "foot");
-  EXPECT_DOUBLE_EQ(stats["units"]["metres_per_unit"].get<double>(), kFoot);
-  EXPECT_EQ(stats["ground_source"], "classification");
-
-  // The ground: horizontal, at the scene's ground height in feet.
+// The model of the synthetic nadir scene in feet (`log`: the run's output, for messages): the ground
+// is one horizontal plane at the scene's ground height, every roof facet is a plane of the model at
+// its place (normal within 2 degrees, the facet's centre within 0.1 m of the plane, the plane's
+// centre over the facet), and no other plane is found. Tolerances: 2 degrees and 0.1 m are several
+// times the error of a least-squares plane through 80+ points with 0.05 m height noise (about 0.3
+// degrees and 0.01 m), and far below a wrong roof's (the nearest other facet differs by 25 degrees
+// or more).
+void expect_ground_and_every_roof(const nlohmann::json& model, const std::vector<Facet>& roofs, const std::string& log) {
   const std::vector<ModelPlane> grounds = planes_of_class(model, "ground");
   ASSERT_EQ(grounds.size(), 1u) << log;
   EXPECT_GT(grounds[0].normal.z(), std::cos(1.0 * M_PI / 180.0));
@@ -230,7 +216,6 @@ TEST(AirborneLas, SyntheticRoofsInFeetAreFoundInFileCoordinates) {
   const double ground_height_feet = -(grounds[0].offset + grounds[0].normal.head<2>().dot(scene_centre_feet.head<2>())) / grounds[0].normal.z();
   EXPECT_NEAR(ground_height_feet * kFoot, kSceneOrigin.z(), 0.02) << "ground height, m";
 
-  // Every roof facet: one plane at its place.
   const std::vector<ModelPlane> planes = planes_of_class(model, "plane");
   std::vector<int> matches(planes.size(), 0);
   for (std::size_t f = 0; f < roofs.size(); ++f) {
@@ -252,6 +237,24 @@ TEST(AirborneLas, SyntheticRoofsInFeetAreFoundInFileCoordinates) {
     EXPECT_EQ(matches[p], 1) << "plane " << p << " normal " << planes[p].normal.transpose() << " centre "
                              << planes[p].centre.transpose() << " ft matches " << matches[p] << " facets";
   EXPECT_EQ(model["stats"]["counts_by_type"].value("circular_cylinder", 0), 0);
+}
+
+// The synthetic nadir scene in feet, modelled whole: ground from the file's classification, every
+// roof where the scene put it, in the file's feet (expect_ground_and_every_roof).
+TEST(AirborneLas, SyntheticRoofsInFeetAreFoundInFileCoordinates) {
+  const Folder folder("quadrix_airborne_synthetic");
+  const std::vector<Facet> roofs = synthetic_roofs();
+  write_feet_las(folder.file("scene.las"), nadir_scan(roofs, 1.0, 0.05, 2024));
+  std::string log;
+  const nlohmann::json model = run_model(folder, folder.file("scene.las"), "--preset airborne", "scene", &log);
+  ASSERT_TRUE(model.contains("stats")) << log;
+  const nlohmann::json& stats = model["stats"];
+  EXPECT_EQ(stats["preset"], "airborne");
+  EXPECT_EQ(stats["status"], "ok") << log;
+  EXPECT_EQ(stats["units"]["name"], "foot");
+  EXPECT_DOUBLE_EQ(stats["units"]["metres_per_unit"].get<double>(), kFoot);
+  EXPECT_EQ(stats["ground_source"], "classification");
+  expect_ground_and_every_roof(model, roofs, log);
 
   // `auto` measures the same scene as a nadir view.
   const nlohmann::json automatic = run_model(folder, folder.file("scene.las"), "", "auto");
@@ -280,21 +283,33 @@ TEST(AirborneLas, GeographicCoordinatesAreRefused) {
   EXPECT_FALSE(std::filesystem::exists(folder.file("m.json")));
 }
 
-// A file in feet is modelled whole in metres: tiles (whose sizes, margins and merge rules are in
-// metres of the file) are refused with the reason rather than run in the wrong unit.
-TEST(AirborneLas, FeetAreNotModelledTileByTile) {
+// A file in feet tile by tile: the tiles are cut and modelled in metres (their sizes, margins and
+// merge rules are metres) and the model is written in the file's feet, with the same roofs as the
+// whole model (expect_ground_and_every_roof: 60 m tiles over the 160 m scene cut the roofs' plane
+// pieces apart, so each facet found once means the merge joined them). Tile groups for separate
+// processes (--tile i/n) are refused with the reason, as their parts are not joined across units.
+TEST(AirborneLas, FeetAreModelledTileByTileInMetres) {
   const Folder folder("quadrix_airborne_tiles");
-  write_feet_las(folder.file("scene.las"), nadir_scan(synthetic_roofs(), 0.2, 0.05, 7));
+  const std::vector<Facet> roofs = synthetic_roofs();
+  write_feet_las(folder.file("scene.las"), nadir_scan(roofs, 1.0, 0.05, 2024));
+  std::string log;
+  const nlohmann::json model = run_model(folder, folder.file("scene.las"), "--preset airborne --tile-size 60", "tiled", &log);
+  ASSERT_TRUE(model.contains("stats")) << log;
+  EXPECT_EQ(model["stats"]["status"], "ok") << log;
+  EXPECT_EQ(model["stats"]["units"]["name"], "foot");
+  EXPECT_GT(model["stats"]["tiling"]["tiles"].get<int>(), 1) << log;
+  expect_ground_and_every_roof(model, roofs, log);
+
   const std::string command = std::string(QUADRIX_EXECUTABLE) + " model '" + folder.file("scene.las") +
-                              "' --no-page --preset airborne --tile-size 50 --out '" + folder.file("m.json") + "' > '" +
+                              "' --no-page --preset airborne --tile 1/2 --out '" + folder.file("part.json") + "' > '" +
                               folder.file("log.txt") + "' 2>&1";
   const int status = std::system(command.c_str());
   std::ifstream log_file(folder.file("log.txt"));
   const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
   EXPECT_EQ(WEXITSTATUS(status), 2) << text;
   EXPECT_NE(text.find("foot"), std::string::npos) << text;
-  EXPECT_NE(text.find("tile by tile"), std::string::npos) << text;
-  EXPECT_FALSE(std::filesystem::exists(folder.file("m.json")));
+  EXPECT_NE(text.find("--tile i/n"), std::string::npos) << text;
+  EXPECT_FALSE(std::filesystem::exists(folder.file("part.json")));
 }
 
 // The real airborne tile (Autzen, state-plane feet, classes 1 and 2) has no primitive truth. What is
