@@ -7,6 +7,7 @@
 #include "geometry/constants.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "geometry/las.h"
 
 #include <tbb/parallel_for.h>
 
@@ -151,6 +152,7 @@ ScanModel model_one_scan(const ScanList& list, std::size_t index, const MapOptio
   const std::string where = list.source + ": row " + std::to_string(entry.row) + " (" + entry.scan + "): ";
   PointCloud cloud;
   try {
+    require_metres(coordinate_units(entry.path), entry.path, "a map");
     cloud = read_point_cloud(entry.path);
   } catch (const Error& error) {
     throw Error(where + error.what());

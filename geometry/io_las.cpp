@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -484,6 +485,14 @@ CoordinateUnits coordinate_units(const std::string& path, CloudFormat format) {
     throw file_error(path, "its CRS declares x and y in " + units.name + " but z in " + declared.vertical_name +
                            ": mixed units are not modelled (convert z to the x and y unit first)");
   return units;
+}
+
+void require_metres(const CoordinateUnits& units, const std::string& path, const std::string& what) {
+  if (units.metres_per_unit == 1.0) return;
+  char size[64];
+  std::snprintf(size, sizeof size, "%.10g", units.metres_per_unit);
+  throw file_error(path, "its coordinates are in " + units.name + " (" + size + " m, declared by its " + units.source + "); " + what +
+                             " works in metres: scale the file to metres first (quadrix model converts it by itself)");
 }
 
 }  // namespace quadrix

@@ -74,4 +74,8 @@ struct CoordinateUnits {
 /// (degrees are not lengths) and for z declared in another unit than x and y.
 CoordinateUnits coordinate_units(const std::string& path, CloudFormat format = CloudFormat::Auto);
 
+/// Throws quadrix::Error naming `path` when `units` are not metres: for the stages that work in
+/// metres only (`what`: "registration", "a map"), so a scan in feet is never taken for metres.
+void require_metres(const CoordinateUnits& units, const std::string& path, const std::string& what);
+
 }  // namespace quadrix

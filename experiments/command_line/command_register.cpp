@@ -19,6 +19,7 @@
 #include "experiments/reports/registration_report.h"
 #include "geometry/error.h"
 #include "geometry/io.h"
+#include "geometry/las.h"
 
 #include <chrono>
 #include <cmath>
@@ -142,6 +143,8 @@ void run(const RegisterCommandOptions& options) {
   // Read relative to a local origin (large coordinates stay exact) and centred in double.
   CloudReadOptions read_options;
   read_options.local_origin = LocalOrigin::Auto;
+  require_metres(coordinate_units(options.source), options.source, "registration");
+  require_metres(coordinate_units(options.target), options.target, "registration");
   const PointCloud source = centred_on_sensor(read_point_cloud(options.source, read_options), source_origin);
   const PointCloud target = centred_on_sensor(read_point_cloud(options.target, read_options), target_origin);
   require_finite_points(source, "--source-origin moved " + options.source);

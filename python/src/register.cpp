@@ -163,6 +163,8 @@ as an answer when it is ok.
         RegistrationReportContext context;
         const PointCloud& source_given = cloud_from_object(source_object, "source", source_holder, &context.source_path);
         const PointCloud& target_given = cloud_from_object(target_object, "target", target_holder, &context.target_path);
+        require_metres(source_holder->units, context.source_path.empty() ? "source" : context.source_path, "registration");
+        require_metres(target_holder->units, context.target_path.empty() ? "target" : context.target_path, "registration");
         // A cloud given as a quadrix.Cloud is used in place: it is copied only to be moved.
         PointCloud source_centred, target_centred;
         if (centred) {

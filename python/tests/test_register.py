@@ -180,3 +180,9 @@ def test_the_docstring_explains_the_arguments():
     text = quadrix.register.__doc__
     for word in ("source", "target", "preset", "config", "refiner", "ground_truth", "transform", "status", "GIL"):
         assert word in text
+
+
+def test_a_scan_in_feet_is_refused_not_registered_as_metres(shared_data):
+    las = shared_data("als_autzen/autzen_trim.las")
+    with pytest.raises(ValueError, match="foot.*metres"):
+        quadrix.register(las, las)

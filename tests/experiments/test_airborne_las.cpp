@@ -312,6 +312,32 @@ TEST(AirborneLas, FeetAreModelledTileByTileInMetres) {
   EXPECT_FALSE(std::filesystem::exists(folder.file("part.json")));
 }
 
+// Registration and maps work in metres only: a scan in feet is refused before any work, with an
+// error naming the file and its unit (exit 2, nothing written), never registered as if in metres.
+TEST(AirborneLas, RegisterAndMapRefuseScansInFeet) {
+  const Folder folder("quadrix_airborne_refused");
+  write_feet_las(folder.file("a.las"), nadir_scan(synthetic_roofs(), 0.2, 0.05, 11));
+  write_feet_las(folder.file("b.las"), nadir_scan(synthetic_roofs(), 0.2, 0.05, 12));
+  {
+    std::ofstream list(folder.file("scans.tsv"));
+    list << "session\tscan\todometry\n" << "s\ta.las\t-\n" << "s\tb.las\t-\n";
+  }
+  const auto run = [&](const std::string& arguments, const std::string& out) {
+    const std::string command = std::string(QUADRIX_EXECUTABLE) + " " + arguments + " --out '" + folder.file(out) + "' > '" +
+                                folder.file("log.txt") + "' 2>&1";
+    const int status = std::system(command.c_str());
+    std::ifstream log_file(folder.file("log.txt"));
+    const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(WEXITSTATUS(status), 2) << text;
+    EXPECT_NE(text.find("a.las"), std::string::npos) << text;
+    EXPECT_NE(text.find("foot"), std::string::npos) << text;
+    EXPECT_NE(text.find("metres"), std::string::npos) << text;
+    EXPECT_FALSE(std::filesystem::exists(folder.file(out))) << text;
+  };
+  run("register '" + folder.file("a.las") + "' '" + folder.file("b.las") + "'", "registration");
+  run("map '" + folder.file("scans.tsv") + "'", "map");
+}
+
 // The real airborne tile (Autzen, state-plane feet, classes 1 and 2) has no primitive truth. What is
 // checked, each from a rule rather than from this tile's numbers:
 // - the model is in the file's coordinates: every centre inside the header's bounds (feet);
