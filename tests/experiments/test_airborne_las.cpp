@@ -52,6 +52,19 @@ nlohmann::json run_model(const Folder& folder, const std::string& input, const s
   return nlohmann::json::parse(json_file);
 }
 
+/// Runs `quadrix ARGUMENTS --out OUT` (OUT a name in `folder`) and expects it refused: exit 2, every
+/// one of `words` in the message, nothing written at OUT.
+void expect_refused(const Folder& folder, const std::string& arguments, const std::string& out, const std::vector<std::string>& words) {
+  const std::string command = std::string(QUADRIX_EXECUTABLE) + " " + arguments + " --out '" + folder.file(out) + "' > '" +
+                              folder.file("log.txt") + "' 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream log_file(folder.file("log.txt"));
+  const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(WEXITSTATUS(status), 2) << command << "\n" << text;
+  for (const std::string& word : words) EXPECT_NE(text.find(word), std::string::npos) << "'" << word << "' in\n" << text;
+  EXPECT_FALSE(std::filesystem::exists(folder.file(out))) << text;
+}
+
 Eigen::Vector3d vector_of(const nlohmann::json& values) {
   return Eigen::Vector3d(values[0].get<double>(), values[1].get<double>(), values[2].get<double>());
 }
@@ -239,8 +252,8 @@ void expect_ground_and_every_roof(const nlohmann::json& model, const std::vector
   EXPECT_EQ(model["stats"]["counts_by_type"].value("circular_cylinder", 0), 0);
 }
 
-// The synthetic nadir scene in feet, modelled whole: ground from the file's classification, every
-// roof where the scene put it, in the file's feet (expect_ground_and_every_roof).
+// The synthetic nadir scene in feet, modelled whole (ground from the file's classification) and tile
+// by tile: every roof where the scene put it, in the file's feet (expect_ground_and_every_roof).
 TEST(AirborneLas, SyntheticRoofsInFeetAreFoundInFileCoordinates) {
   const Folder folder("quadrix_airborne_synthetic");
   const std::vector<Facet> roofs = synthetic_roofs();
@@ -255,6 +268,20 @@ TEST(AirborneLas, SyntheticRoofsInFeetAreFoundInFileCoordinates) {
   EXPECT_DOUBLE_EQ(stats["units"]["metres_per_unit"].get<double>(), kFoot);
   EXPECT_EQ(stats["ground_source"], "classification");
   expect_ground_and_every_roof(model, roofs, log);
+
+  // Tile by tile: the tiles are cut and modelled in metres (their sizes, margins and merge rules are
+  // metres) and the model is written in the file's feet, with the same roofs (60 m tiles over the
+  // 160 m scene cut the roofs' plane pieces apart, so each facet found once means the merge joined
+  // them). Tile groups for separate processes (--tile i/n) are refused with the reason, as their
+  // parts are joined in metres and carry no unit.
+  const nlohmann::json tiled = run_model(folder, folder.file("scene.las"), "--preset airborne --tile-size 60", "tiled", &log);
+  ASSERT_TRUE(tiled.contains("stats")) << log;
+  EXPECT_EQ(tiled["stats"]["status"], "ok") << log;
+  EXPECT_EQ(tiled["stats"]["units"]["name"], "foot");
+  EXPECT_GT(tiled["stats"]["tiling"]["tiles"].get<int>(), 1) << log;
+  expect_ground_and_every_roof(tiled, roofs, log);
+  expect_refused(folder, "model '" + folder.file("scene.las") + "' --no-page --preset airborne --tile 1/2", "part.json",
+                 {"foot", "--tile i/n"});
 
   // `auto` measures the same scene as a nadir view.
   const nlohmann::json automatic = run_model(folder, folder.file("scene.las"), "", "auto");
@@ -273,43 +300,7 @@ TEST(AirborneLas, GeographicCoordinatesAreRefused) {
   file.vlrs = {vlr};
   file.points = testing::random_las_points(200, 5);
   testing::write_bytes(folder.file("degrees.las"), testing::las_test_bytes(file));
-  const std::string command = std::string(QUADRIX_EXECUTABLE) + " model '" + folder.file("degrees.las") +
-                              "' --no-page --preset airborne --out '" + folder.file("m.json") + "' > '" + folder.file("log.txt") + "' 2>&1";
-  const int status = std::system(command.c_str());
-  std::ifstream log_file(folder.file("log.txt"));
-  const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
-  EXPECT_NE(text.find("degrees"), std::string::npos) << text;
-  EXPECT_FALSE(std::filesystem::exists(folder.file("m.json")));
-}
-
-// A file in feet tile by tile: the tiles are cut and modelled in metres (their sizes, margins and
-// merge rules are metres) and the model is written in the file's feet, with the same roofs as the
-// whole model (expect_ground_and_every_roof: 60 m tiles over the 160 m scene cut the roofs' plane
-// pieces apart, so each facet found once means the merge joined them). Tile groups for separate
-// processes (--tile i/n) are refused with the reason, as their parts are not joined across units.
-TEST(AirborneLas, FeetAreModelledTileByTileInMetres) {
-  const Folder folder("quadrix_airborne_tiles");
-  const std::vector<Facet> roofs = synthetic_roofs();
-  write_feet_las(folder.file("scene.las"), nadir_scan(roofs, 1.0, 0.05, 2024));
-  std::string log;
-  const nlohmann::json model = run_model(folder, folder.file("scene.las"), "--preset airborne --tile-size 60", "tiled", &log);
-  ASSERT_TRUE(model.contains("stats")) << log;
-  EXPECT_EQ(model["stats"]["status"], "ok") << log;
-  EXPECT_EQ(model["stats"]["units"]["name"], "foot");
-  EXPECT_GT(model["stats"]["tiling"]["tiles"].get<int>(), 1) << log;
-  expect_ground_and_every_roof(model, roofs, log);
-
-  const std::string command = std::string(QUADRIX_EXECUTABLE) + " model '" + folder.file("scene.las") +
-                              "' --no-page --preset airborne --tile 1/2 --out '" + folder.file("part.json") + "' > '" +
-                              folder.file("log.txt") + "' 2>&1";
-  const int status = std::system(command.c_str());
-  std::ifstream log_file(folder.file("log.txt"));
-  const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(WEXITSTATUS(status), 2) << text;
-  EXPECT_NE(text.find("foot"), std::string::npos) << text;
-  EXPECT_NE(text.find("--tile i/n"), std::string::npos) << text;
-  EXPECT_FALSE(std::filesystem::exists(folder.file("part.json")));
+  expect_refused(folder, "model '" + folder.file("degrees.las") + "' --no-page --preset airborne", "m.json", {"degrees"});
 }
 
 // Registration and maps work in metres only: a scan in feet is refused before any work, with an
@@ -322,20 +313,9 @@ TEST(AirborneLas, RegisterAndMapRefuseScansInFeet) {
     std::ofstream list(folder.file("scans.tsv"));
     list << "session\tscan\todometry\n" << "s\ta.las\t-\n" << "s\tb.las\t-\n";
   }
-  const auto run = [&](const std::string& arguments, const std::string& out) {
-    const std::string command = std::string(QUADRIX_EXECUTABLE) + " " + arguments + " --out '" + folder.file(out) + "' > '" +
-                                folder.file("log.txt") + "' 2>&1";
-    const int status = std::system(command.c_str());
-    std::ifstream log_file(folder.file("log.txt"));
-    const std::string text((std::istreambuf_iterator<char>(log_file)), std::istreambuf_iterator<char>());
-    EXPECT_EQ(WEXITSTATUS(status), 2) << text;
-    EXPECT_NE(text.find("a.las"), std::string::npos) << text;
-    EXPECT_NE(text.find("foot"), std::string::npos) << text;
-    EXPECT_NE(text.find("metres"), std::string::npos) << text;
-    EXPECT_FALSE(std::filesystem::exists(folder.file(out))) << text;
-  };
-  run("register '" + folder.file("a.las") + "' '" + folder.file("b.las") + "'", "registration");
-  run("map '" + folder.file("scans.tsv") + "'", "map");
+  expect_refused(folder, "register '" + folder.file("a.las") + "' '" + folder.file("b.las") + "'", "registration",
+                 {"a.las", "foot", "metres"});
+  expect_refused(folder, "map '" + folder.file("scans.tsv") + "'", "map", {"a.las", "foot", "metres"});
 }
 
 // The real airborne tile (Autzen, state-plane feet, classes 1 and 2) has no primitive truth. What is
