@@ -537,15 +537,17 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
   if (options.tile_size > 0.0 && options.tile_size <= 2.0 * options.margin)
     throw Error("--tile-size: a tile of " + std::to_string(options.tile_size) + " m must be wider than twice the margin (" +
                 std::to_string(options.margin) + " m)");
+  auto start = Clock::now();
   const TileLayout layout =
       options.tile_size > 0.0 ? TileLayout::squares(options.tile_size) : layout_for_budget(source, options, threads);
+  if (options.tile_size <= 0.0) part.timings_ms["counting"] = detail::elapsed_ms(start);
   part.tile_size = layout.cell();
   part.tile_points = layout.target();
 
   // Pass 1: binning.
   TemporaryFolder folder(options.temporary_parent);
   TileBinner binner(folder.path(), layout, options.margin, options.group, options.groups);
-  auto start = Clock::now();
+  start = Clock::now();
   Eigen::Matrix3Xd chunk;
   source.rewind();
   std::size_t binned = 0;
@@ -566,6 +568,7 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
     }
   }
   part.tiles = tiles.size();
+  part.timings_ms["binning"] = detail::elapsed_ms(start);
 
   // Pass 2: each tile with its margin, as many at once as the threads and the budget allow.
   start = Clock::now();
@@ -627,6 +630,7 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
     });
   });
   if (failure) std::rethrow_exception(failure);
+  part.timings_ms["modelling"] = detail::elapsed_ms(start);
   for (auto& pieces : tile_pieces)
     for (TilePiece& piece : pieces) part.pieces.push_back(std::move(piece));
   return part;
@@ -814,6 +818,7 @@ ModellingResult model_tiled(PointChunkSource& source, const ExtractionOptions& e
   if (options.progress) options.progress({3, 0, 0, part.tiles, part.tiles, 0.0});
   ModellingResult result = merge_partial_models({part}, extraction, modelling, options);
   result.model.timings_ms["tiles"] = tiles_ms;
+  result.model.timings_ms.insert(part.timings_ms.begin(), part.timings_ms.end());
   result.model.timings_ms["total"] = detail::elapsed_ms(start);
   return result;
 }

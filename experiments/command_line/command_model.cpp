@@ -544,7 +544,7 @@ void write_tiled_model(const std::string& out, const std::string& binary, const 
   std::printf("%-12s %-20s %9s\n", "class", "type", "quadrics");
   for (const auto& [key, count] : counts) std::printf("%-12s %-20s %9d\n", key.first.c_str(), key.second.c_str(), count);
   std::printf("%-12s %-20s %9zu\n\ntimings (ms, 2 shared cores):", "total", "", model.size());
-  for (const char* stage : {"tiles", "merge", "fitting", "total"}) {
+  for (const char* stage : {"counting", "binning", "modelling", "tiles", "merge", "fitting", "total"}) {
     const auto it = model.timings_ms.find(stage);
     if (it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);
   }
@@ -581,6 +581,7 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
   if (tiling.progress) tiling.progress({3, 0, 0, part.tiles, part.tiles, 0.0});
   ModellingResult result = merge_partial_models({part}, extraction, modelling, tiling);
   result.model.timings_ms["tiles"] = tiles_ms;
+  result.model.timings_ms.insert(part.timings_ms.begin(), part.timings_ms.end());
   result.model.timings_ms["total"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json tiling_json = {{"tile_size", part.tile_size}, {"tile_size_requested", tiling.tile_size},
                                       {"tile_points", part.tile_points}, {"largest_tile", part.largest_tile},
