@@ -717,13 +717,15 @@ void merge_similar_shapes(std::vector<DetectedShape>& shapes, const Eigen::Matri
         return similar_size(a.size, b.size) && offset.norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
       case QuadricType::CircularCone:
         // Apexes of wide cones fitted to pieces lie far from the points: axes and angles gate, and
-        // the pieces' boxes come within merge_plane_gap (pieces of one cone overlap or nearly; the
-        // equal roof rings of a survey's buildings are not refitted pair by pair). A narrow strip
-        // of a wide cone (a tile's sliver of a roof ring) pins its axis and angle down poorly, so
-        // a piece also joins when the other's cone explains its points.
-        if (shape_options.merge_plane_gap > 0.0 && (((b.lower - a.upper).array() > shape_options.merge_plane_gap).any() ||
-                                                    ((a.lower - b.upper).array() > shape_options.merge_plane_gap).any()))
-          return false;
+        // the pieces' boxes lie no farther apart than the larger box is across (or merge_plane_gap):
+        // two arcs of one roof ring may be apart by a third arc that a tile found as another shape,
+        // while the equal roof rings of a survey's buildings are not refitted pair by pair. A
+        // narrow strip of a wide cone (a tile's sliver of a roof ring) pins its axis and angle down
+        // poorly, so a piece also joins when the other's cone explains its points.
+        {
+          const double reach = std::max({shape_options.merge_plane_gap, (a.upper - a.lower).norm(), (b.upper - b.lower).norm()});
+          if (((b.lower - a.upper).array() > reach).any() || ((a.lower - b.upper).array() > reach).any()) return false;
+        }
         return (a.axis.dot(b.axis) >= cos_angle && std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0) ||
                explains(a, simplified, b.members, shape_options) || explains(b, simplified, a.members, shape_options);
       default: return false;
