@@ -8,6 +8,8 @@
 #include "fitting/extraction_internal.h"
 #include "geometry/constants.h"
 
+#include <CGAL/Eigen_matrix.h>
+#include <CGAL/Eigen_vector.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Random.h>
 #include <CGAL/Shape_detection/Efficient_RANSAC.h>
@@ -306,10 +308,11 @@ bool refine_cone(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t
     trial.axis = (a0 + delta(3) * t1 + delta(4) * t2).normalized();
     trial.size = alpha0 + delta(5);
     out.resize(static_cast<Eigen::Index>(sample.size()));
+    const double cosine = std::cos(trial.size), sine = std::sin(trial.size);
     for (std::size_t k = 0; k < sample.size(); ++k) {
       const Eigen::Vector3d d = points.col(sample[k]) - trial.point;
       const double along = d.dot(trial.axis), across = (d - along * trial.axis).norm();
-      out(static_cast<Eigen::Index>(k)) = across * std::cos(trial.size) - along * std::sin(trial.size);
+      out(static_cast<Eigen::Index>(k)) = across * cosine - along * sine;
     }
     return trial;
   };
@@ -512,13 +515,30 @@ PointWithNormalVector representatives_with_normals(const Eigen::Matrix3Xd& point
   return input;
 }
 
+/// The least-squares solver of CGAL's jet fitting (its SvdTraits concept, as CGAL::Eigen_svd): a
+/// complete orthogonal decomposition (column-pivoted QR, then QR of R's transpose) gives the same
+/// minimum-norm least-squares solution as Eigen_svd's Jacobi SVD, which took about 19% of a tiled
+/// survey's modelling CPU (`perf`, the 24.9 M-point site) for the 18 x 6 systems of a degree-2 jet.
+/// The condition number is estimated from the pivoted R's diagonal (jet normals do not read it).
+struct OrthogonalDecompositionSolver {
+  typedef double FT;
+  typedef CGAL::Eigen_vector<FT> Vector;
+  typedef CGAL::Eigen_matrix<FT> Matrix;
+  static FT solve(const Matrix& m, Vector& b) {
+    const Eigen::CompleteOrthogonalDecomposition<Matrix::EigenType> decomposition(m.eigen_object());
+    b.eigen_object() = decomposition.solve(Vector::EigenType(b.eigen_object()));
+    const auto diagonal = decomposition.matrixQTZ().diagonal().cwiseAbs();
+    return diagonal.minCoeff() > 0.0 ? diagonal.maxCoeff() / diagonal.minCoeff() : std::numeric_limits<FT>::infinity();
+  }
+};
+
 /// Normals by CGAL jet fitting over `neighbours` neighbours, oriented toward the scanner (a TLS
 /// station sees the outside of each surface).
 void estimate_oriented_normals(PointWithNormalVector& input, int neighbours, const Eigen::Vector3d& sensor_origin) {
   if (input.size() >= 3) {
     CGAL::jet_estimate_normals<CGAL::Parallel_if_available_tag>(
         input, static_cast<unsigned>(std::max(3, neighbours)),
-        CGAL::parameters::point_map(PointMap()).normal_map(NormalMap()));
+        CGAL::parameters::point_map(PointMap()).normal_map(NormalMap()).svd_traits(OrthogonalDecompositionSolver()));
   }
   for (PointWithNormal& item : input) {
     const Eigen::Vector3d p(item.first.x(), item.first.y(), item.first.z());
@@ -696,10 +716,30 @@ void merge_similar_shapes(std::vector<DetectedShape>& shapes, const Eigen::Matri
       case QuadricType::Sphere:
         return similar_size(a.size, b.size) && offset.norm() <= distance + std::max(a.size, b.size) * shape_options.merge_radius_fraction;
       case QuadricType::CircularCone:
-        // Apexes of wide cones fitted to pieces lie far from the points: only axes and angles gate.
-        return a.axis.dot(b.axis) >= cos_angle && std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0;
+        // Apexes of wide cones fitted to pieces lie far from the points: axes and angles gate, and
+        // the pieces' boxes lie no farther apart than the larger box is across (or merge_plane_gap):
+        // two arcs of one roof ring may be apart by a third arc that a tile found as another shape,
+        // while the equal roof rings of a survey's buildings are not refitted pair by pair. A
+        // narrow strip of a wide cone (a tile's sliver of a roof ring) pins its axis and angle down
+        // poorly, so a piece also joins when the other's cone explains its points.
+        {
+          const double reach = std::max({shape_options.merge_plane_gap, (a.upper - a.lower).norm(), (b.upper - b.lower).norm()});
+          if (((b.lower - a.upper).array() > reach).any() || ((a.lower - b.upper).array() > reach).any()) return false;
+        }
+        return (a.axis.dot(b.axis) >= cos_angle && std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0) ||
+               explains(a, simplified, b.members, shape_options) || explains(b, simplified, a.members, shape_options);
       default: return false;
     }
+  };
+  // The refit of two pieces starts from the larger's parameters, and for cones also from the
+  // smaller's: the better-determined piece is not always the larger one.
+  const auto joint_refit = [&](const DetectedShape& a, const DetectedShape& b, const std::vector<std::uint32_t>& united,
+                               DetectedShape& candidate) {
+    if (refit(simplified, simplified_normals, united, a, shape_options, candidate) &&
+        explains(candidate, simplified, united, shape_options))
+      return true;
+    return a.type == QuadricType::CircularCone && refine_cone(simplified, united, candidate = b) &&
+           explains(candidate, simplified, united, shape_options);
   };
   for (std::size_t b = 1; b < shapes.size(); ++b) {
     for (std::size_t a = 0; a < b; ++a) {
@@ -707,9 +747,8 @@ void merge_similar_shapes(std::vector<DetectedShape>& shapes, const Eigen::Matri
       std::vector<std::uint32_t> united = shapes[a].members;
       united.insert(united.end(), shapes[b].members.begin(), shapes[b].members.end());
       DetectedShape candidate;
-      if (!refit(simplified, simplified_normals, united, shapes[a], shape_options, candidate) ||
-          !explains(candidate, simplified, united, shape_options))
-        continue;
+      if (!joint_refit(shapes[a], shapes[b], united, candidate)) continue;
+      candidate.members = united;
       candidate.lower = shapes[a].lower.cwiseMin(shapes[b].lower);
       candidate.upper = shapes[a].upper.cwiseMax(shapes[b].upper);
       shapes[a] = std::move(candidate);
@@ -838,12 +877,16 @@ Eigen::Vector3d surface_normal(const DetectedShape& shape, const Eigen::Vector3d
 
 namespace {
 
-/// Whether two planes explain `members` as well as a shape must (explained_rms, explained_fraction):
-/// the seam of two faces meeting at an angle, which a cone of half the angle between their normals
-/// fits locally (two walls at a right angle: a 45-degree cone along their corner). Each plane is
-/// the best of 256 planes through three members drawn with the options' seed (deterministic),
-/// refitted to its inliers; the second is sought among the members the first leaves.
-bool two_planes_explain(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members,
+/// Whether at most three planes explain `members` as well as a shape must (explained_rms,
+/// explained_fraction): the seam of two faces meeting at an angle, which a cone of half the angle
+/// between their normals fits locally (two walls at a right angle: a 45-degree cone along their
+/// corner), or the corner where a third face meets them (the step at the end of a podium's side
+/// wall, with a strip of the floor above it). Each plane is the best of 256 planes through three
+/// of the members its predecessors leave, drawn with the options' seed (deterministic), refitted
+/// to its inliers. A cone's arc needs more than three chords within epsilon unless it is shorter
+/// than about 3 * sqrt(8 r epsilon) (8.5 m of a 20 m-radius ring at 0.05 m), so only such a short
+/// piece of a true cone that joined no other piece is dissolved with the seams.
+bool few_planes_explain(const Eigen::Matrix3Xd& points, const std::vector<std::uint32_t>& members,
                         const ShapeDetectionOptions& options) {
   if (members.size() < 6) return false;
   const double epsilon = options.epsilon;
@@ -869,23 +912,30 @@ bool two_planes_explain(const Eigen::Matrix3Xd& points, const std::vector<std::u
     plane = fit_plane(points, inliers);
     return true;
   };
-  DetectedShape first, second;
-  if (!best_plane(members, first)) return false;
-  std::vector<std::uint32_t> rest;
-  for (const std::uint32_t i : members)
-    if (surface_distance(first, points.col(i)) > epsilon) rest.push_back(i);
-  if (!rest.empty() && !best_plane(rest, second)) second = first;
-  if (rest.empty()) second = first;
-  double squares = 0.0;
-  std::size_t inside = 0;
-  for (const std::uint32_t i : members) {
-    const double d = std::min(surface_distance(first, points.col(i)), surface_distance(second, points.col(i)));
-    squares += d * d;
-    inside += d <= epsilon ? 1 : 0;
-  }
+  std::vector<DetectedShape> planes;
+  std::vector<std::uint32_t> rest = members;
   const double count = static_cast<double>(members.size());
-  return std::sqrt(squares / count) <= options.explained_rms * epsilon &&
-         static_cast<double>(inside) >= options.explained_fraction * count;
+  for (int plane_count = 1; plane_count <= 3 && !rest.empty(); ++plane_count) {
+    DetectedShape plane;
+    if (!best_plane(rest, plane)) break;
+    planes.push_back(plane);
+    std::vector<std::uint32_t> left;
+    for (const std::uint32_t i : rest)
+      if (surface_distance(plane, points.col(i)) > epsilon) left.push_back(i);
+    rest.swap(left);
+    double squares = 0.0;
+    std::size_t inside = 0;
+    for (const std::uint32_t i : members) {
+      double d = std::numeric_limits<double>::infinity();
+      for (const DetectedShape& face : planes) d = std::min(d, surface_distance(face, points.col(i)));
+      squares += d * d;
+      inside += d <= epsilon ? 1 : 0;
+    }
+    if (plane_count >= 2 && std::sqrt(squares / count) <= options.explained_rms * epsilon &&
+        static_cast<double>(inside) >= options.explained_fraction * count)
+      return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -934,6 +984,30 @@ std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const Shape
     if (now == held) break;
     held = now;
   }
+  // A band of a wide cone that a tile took for a tilted cylinder (join_cylinder_pieces_to_cones
+  // within one cloud) joins the cone when the cone already explains its points and, refined on
+  // both, explains them all; the cone's own pieces are joined by now, so its parameters are those
+  // of the whole surface.
+  const double minimum_angle = minimum_cone_angle(options);
+  for (DetectedShape& cone : shapes) {
+    if (cone.type != QuadricType::CircularCone || cone.members.empty() || cone.size < minimum_angle) continue;
+    for (DetectedShape& piece : shapes) {
+      if (piece.type != QuadricType::CircularCylinder || piece.members.empty() ||
+          ((piece.lower - cone.upper).array() > options.cluster_epsilon).any() ||
+          ((cone.lower - piece.upper).array() > options.cluster_epsilon).any() || !explains(cone, points, piece.members, options))
+        continue;
+      std::vector<std::uint32_t> united = cone.members;
+      united.insert(united.end(), piece.members.begin(), piece.members.end());
+      DetectedShape joined = cone;
+      if (!refine_cone(points, united, joined) || joined.size < minimum_angle || !explains(joined, points, united, options))
+        continue;
+      joined.members = std::move(united);
+      joined.lower = cone.lower.cwiseMin(piece.lower);
+      joined.upper = cone.upper.cwiseMax(piece.upper);
+      cone = std::move(joined);
+      piece.members.clear();
+    }
+  }
   // Joined pieces: each sorted piece's first point tells which kept shape now holds it.
   std::vector<int> holder_of_point(static_cast<std::size_t>(total), -1);
   for (std::size_t k = 0; k < shapes.size(); ++k)
@@ -950,18 +1024,29 @@ std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const Shape
   // A primitive the larger ones explain is dissolved, as detect_shapes dissolves such a shape within
   // one cloud (the seam of two walls a tile took for a 45-degree cone, with the walls' pieces in
   // its neighbours): its pieces are left out, since their points cannot be split between the
-  // larger primitives any more.
+  // larger primitives any more. Larger is judged by the joined primitives' points, not by their
+  // largest pieces': a tile's cone along the corner of a podium holds more points than that tile's
+  // pieces of the podium's faces, but not than the faces joined over their tiles.
   std::vector<bool> dissolved(shapes.size(), false);
   if (options.absorb_fraction <= 1.0) {
-    std::vector<bool> held(shapes.size(), false);
-    for (std::size_t k = 0; k < shapes.size(); ++k) held[k] = !shapes[k].members.empty();
-    absorb_explained_shapes(shapes, points, options);
-    for (std::size_t k = 0; k < shapes.size(); ++k) dissolved[k] = held[k] && shapes[k].members.empty();
+    std::vector<double> joined_weight(shapes.size(), 0.0);
+    for (std::size_t k = 0; k < order.size(); ++k)
+      joined_weight[static_cast<std::size_t>(holder_of_piece[k])] += pieces[static_cast<std::size_t>(order[k])].weight;
+    std::vector<std::size_t> by_weight(shapes.size());
+    std::iota(by_weight.begin(), by_weight.end(), std::size_t{0});
+    std::stable_sort(by_weight.begin(), by_weight.end(),
+                     [&](std::size_t a, std::size_t b) { return joined_weight[a] > joined_weight[b]; });
+    std::vector<DetectedShape> sorted(shapes.size());
+    for (std::size_t k = 0; k < by_weight.size(); ++k) sorted[k] = shapes[by_weight[k]];
+    absorb_explained_shapes(sorted, points, options);
+    for (std::size_t k = 0; k < by_weight.size(); ++k)
+      dissolved[by_weight[k]] = !shapes[by_weight[k]].members.empty() && sorted[k].members.empty();
   }
-  // A cone that two planes explain is the seam of two faces whose larger pieces lie in other tiles.
+  // A cone that two or three planes explain is the seam or corner of faces whose larger pieces lie
+  // in other tiles (or that the cone took whole in its tile).
   for (std::size_t k = 0; k < shapes.size(); ++k)
     if (shapes[k].type == QuadricType::CircularCone && !shapes[k].members.empty() &&
-        two_planes_explain(points, shapes[k].members, options)) {
+        few_planes_explain(points, shapes[k].members, options)) {
       shapes[k].members.clear();
       dissolved[k] = true;
     }

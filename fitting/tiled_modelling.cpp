@@ -8,11 +8,13 @@
 #include "geometry/io.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 #include <tbb/task_arena.h>
 
 #include <stdlib.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -22,6 +24,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <numeric>
 #include <sstream>
 #include <thread>
 #include <unordered_map>
@@ -537,15 +540,17 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
   if (options.tile_size > 0.0 && options.tile_size <= 2.0 * options.margin)
     throw Error("--tile-size: a tile of " + std::to_string(options.tile_size) + " m must be wider than twice the margin (" +
                 std::to_string(options.margin) + " m)");
+  auto start = Clock::now();
   const TileLayout layout =
       options.tile_size > 0.0 ? TileLayout::squares(options.tile_size) : layout_for_budget(source, options, threads);
+  if (options.tile_size <= 0.0) part.timings_ms["counting"] = detail::elapsed_ms(start);
   part.tile_size = layout.cell();
   part.tile_points = layout.target();
 
   // Pass 1: binning.
   TemporaryFolder folder(options.temporary_parent);
   TileBinner binner(folder.path(), layout, options.margin, options.group, options.groups);
-  auto start = Clock::now();
+  start = Clock::now();
   Eigen::Matrix3Xd chunk;
   source.rewind();
   std::size_t binned = 0;
@@ -566,6 +571,7 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
     }
   }
   part.tiles = tiles.size();
+  part.timings_ms["binning"] = detail::elapsed_ms(start);
 
   // Pass 2: each tile with its margin, as many at once as the threads and the budget allow.
   start = Clock::now();
@@ -575,58 +581,77 @@ PartialModel model_tile_group(PointChunkSource& source, const ExtractionOptions&
   std::size_t tiles_done = 0, points_done = 0;
   std::exception_ptr failure;
   std::mutex failure_mutex;
+  // One tile with its margin (read from its files, extracted, its pieces kept); a failure is kept
+  // for the caller and stops the tiles not yet begun.
+  const auto model_tile = [&](std::size_t t) {
+    {
+      std::lock_guard<std::mutex> lock(failure_mutex);
+      if (failure) return;
+    }
+    try {
+      const std::uint64_t key = tiles[t];
+      const TileCounts counts = binner.counts().at(key);
+      const std::size_t total = static_cast<std::size_t>(counts.core + counts.margin);
+      const std::size_t bytes = static_cast<std::size_t>(static_cast<double>(total) * kWholeModellingBytesPerPoint);
+      gate.enter(bytes);
+      struct Leave {
+        MemoryGate& gate;
+        std::size_t bytes;
+        ~Leave() { gate.leave(bytes); }
+      } leave{gate, bytes};
+      // Modelled relative to the tile's corner (georeferenced coordinates keep their precision).
+      const Eigen::Vector3d corner = layout.corner(key);
+      Eigen::Matrix3Xd local(3, static_cast<Eigen::Index>(total));
+      read_tile_file(binner.file(key, true), counts.core, Eigen::Vector3d::Zero(), local, 0);
+      read_tile_file(binner.file(key, false), counts.margin, Eigen::Vector3d::Zero(), local,
+                     static_cast<Eigen::Index>(counts.core));
+      PointCloud cloud;
+      cloud.positions = local.cast<float>();
+      ExtractionOptions tile_extraction = extraction;
+      tile_extraction.sensor_origin = extraction.sensor_origin - corner;
+      std::vector<detail::ShapeParameters> parameters;
+      // Isolated: while the extraction's own parallel loops (the normals) wait, this thread must
+      // not take up another tile, or tiles pile up on its stack beyond `threads` and the memory
+      // held grows with the number of tiles the survey has.
+      ExtractionResult result;
+      tbb::this_task_arena::isolate(
+          [&] { result = detail::extract_elements_of_points(local, cloud, tile_extraction, {}, &parameters); });
+      if (parameters.size() != result.elements.size())
+        throw Error("tiles: shape parameters missing for tile (" + std::to_string(tile_x(key)) + ", " +
+                    std::to_string(tile_y(key)) + ")");
+      tile_pieces[t] = pieces_of_tile(local, counts.core, corner, result, parameters, options.sample_points);
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      ++tiles_done;
+      points_done += counts.core;
+      if (options.progress)
+        options.progress({2, points_done, static_cast<std::size_t>(part.group_points), tiles_done, tiles.size(),
+                          seconds_since(start)});
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+    }
+  };
+  // Largest tiles first (longest processing time first): a large tile started last would run on
+  // one thread while the others idle.
+  std::vector<std::size_t> order(tiles.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const TileCounts& x = binner.counts().at(tiles[a]);
+    const TileCounts& y = binner.counts().at(tiles[b]);
+    return x.core + x.margin > y.core + y.margin;
+  });
+  std::atomic<std::size_t> next_tile{0};
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    tbb::parallel_for(std::size_t(0), tiles.size(), std::size_t(1), [&](std::size_t t) {
-      {
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (failure) return;
-      }
-      try {
-        const std::uint64_t key = tiles[t];
-        const TileCounts counts = binner.counts().at(key);
-        const std::size_t total = static_cast<std::size_t>(counts.core + counts.margin);
-        const std::size_t bytes = static_cast<std::size_t>(static_cast<double>(total) * kWholeModellingBytesPerPoint);
-        gate.enter(bytes);
-        struct Leave {
-          MemoryGate& gate;
-          std::size_t bytes;
-          ~Leave() { gate.leave(bytes); }
-        } leave{gate, bytes};
-        // Modelled relative to the tile's corner (georeferenced coordinates keep their precision).
-        const Eigen::Vector3d corner = layout.corner(key);
-        Eigen::Matrix3Xd local(3, static_cast<Eigen::Index>(total));
-        read_tile_file(binner.file(key, true), counts.core, Eigen::Vector3d::Zero(), local, 0);
-        read_tile_file(binner.file(key, false), counts.margin, Eigen::Vector3d::Zero(), local,
-                       static_cast<Eigen::Index>(counts.core));
-        PointCloud cloud;
-        cloud.positions = local.cast<float>();
-        ExtractionOptions tile_extraction = extraction;
-        tile_extraction.sensor_origin = extraction.sensor_origin - corner;
-        std::vector<detail::ShapeParameters> parameters;
-        // Isolated: while the extraction's own parallel loops (the normals) wait, this thread must
-        // not take up another tile, or tiles pile up on its stack beyond `threads` and the memory
-        // held grows with the number of tiles the survey has.
-        ExtractionResult result;
-        tbb::this_task_arena::isolate(
-            [&] { result = detail::extract_elements_of_points(local, cloud, tile_extraction, {}, &parameters); });
-        if (parameters.size() != result.elements.size())
-          throw Error("tiles: shape parameters missing for tile (" + std::to_string(tile_x(key)) + ", " +
-                      std::to_string(tile_y(key)) + ")");
-        tile_pieces[t] = pieces_of_tile(local, counts.core, corner, result, parameters, options.sample_points);
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        ++tiles_done;
-        points_done += counts.core;
-        if (options.progress)
-          options.progress({2, points_done, static_cast<std::size_t>(part.group_points), tiles_done, tiles.size(),
-                            seconds_since(start)});
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-      }
-    });
+    tbb::task_group workers;
+    for (int worker = 0; worker < threads; ++worker)
+      workers.run([&] {
+        for (std::size_t k = next_tile++; k < order.size(); k = next_tile++) model_tile(order[k]);
+      });
+    workers.wait();
   });
   if (failure) std::rethrow_exception(failure);
+  part.timings_ms["modelling"] = detail::elapsed_ms(start);
   for (auto& pieces : tile_pieces)
     for (TilePiece& piece : pieces) part.pieces.push_back(std::move(piece));
   return part;
@@ -814,6 +839,7 @@ ModellingResult model_tiled(PointChunkSource& source, const ExtractionOptions& e
   if (options.progress) options.progress({3, 0, 0, part.tiles, part.tiles, 0.0});
   ModellingResult result = merge_partial_models({part}, extraction, modelling, options);
   result.model.timings_ms["tiles"] = tiles_ms;
+  result.model.timings_ms.insert(part.timings_ms.begin(), part.timings_ms.end());
   result.model.timings_ms["total"] = detail::elapsed_ms(start);
   return result;
 }

@@ -20,6 +20,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -163,6 +164,7 @@ struct PartialModel {
   std::uint64_t tiles = 0;            ///< tiles of this group holding points
   std::uint64_t largest_tile = 0;     ///< core points of this group's largest tile
   std::vector<TilePiece> pieces;      ///< every primitive piece of those tiles
+  std::map<std::string, double> timings_ms;  ///< wall time of "counting" (the tiles split by count), "binning" and "modelling" (pass 2), ms; not written to the file
 };
 
 /// Passes 1 and 2: bins `source` into tiles (square tiles of TilingOptions::tile_size, or without it

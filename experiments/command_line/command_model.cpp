@@ -515,7 +515,7 @@ void write_tiled_model(const std::string& out, const std::string& binary, const 
   std::printf("%-12s %-20s %9s\n", "class", "type", "quadrics");
   for (const auto& [key, count] : counts) std::printf("%-12s %-20s %9d\n", key.first.c_str(), key.second.c_str(), count);
   std::printf("%-12s %-20s %9zu\n\ntimings (ms, 2 shared cores):", "total", "", model.size());
-  for (const char* stage : {"tiles", "merge", "fitting", "total"}) {
+  for (const char* stage : {"counting", "binning", "modelling", "tiles", "merge", "fitting", "total"}) {
     const auto it = model.timings_ms.find(stage);
     if (it != model.timings_ms.end()) std::printf("  %s %.1f", stage, it->second);
   }
@@ -563,6 +563,7 @@ void run_tiled(const ModelCommandOptions& options, ExtractionOptions extraction,
   ModellingResult result = merge_partial_models({part}, extraction, modelling, tiling);
   if (rescaled) result.model = scaled(std::move(result.model), 1.0 / units.metres_per_unit);
   result.model.timings_ms["tiles"] = tiles_ms;
+  result.model.timings_ms.insert(part.timings_ms.begin(), part.timings_ms.end());
   result.model.timings_ms["total"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const nlohmann::json tiling_json = {{"tile_size", part.tile_size}, {"tile_size_requested", tiling.tile_size},
                                       {"tile_points", part.tile_points}, {"largest_tile", part.largest_tile},

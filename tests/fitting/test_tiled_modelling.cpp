@@ -366,6 +366,114 @@ TEST(TiledMerge, ConePiecesJoinAndACornerIsNoCone) {
   EXPECT_EQ(detail::merge_shape_pieces(alone, options, Eigen::Vector3d::UnitZ()), std::vector<int>{0});
 }
 
+// A roof ring as on the monument's drum (a cone opening downward, apex 30 m up, half-angle
+// 26.565 degrees, 10 to 14 m across, the monument preset) over a floor, cut by 6 m tiles into
+// strips whose cones each tile pins down poorly, is one cone again after the merge, as modelled whole.
+TEST_F(TiledModelling, ARoofRingCutIntoStripsByTileBordersMergesBackIntoOneCone) {
+  const Eigen::Vector3d apex(1.5, 2.5, 30.0), down(0.0, 0.0, -1.0);
+  const double angle = 26.565 * kPi / 180.0;
+  const int ring_points = 27000;  // 40 points/m^2 over its 675 m^2
+  const Eigen::Matrix3Xd ring = cone_points(apex, down, angle, 20.0, 28.0, 0.0, 2.0 * kPi, ring_points, 21);
+  std::mt19937_64 engine(22);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.004);
+  const int floor_points = 12000;
+  Eigen::Matrix3Xf points(3, ring_points + floor_points);
+  points.leftCols(ring_points) = ring.cast<float>();
+  for (int i = 0; i < floor_points; ++i)
+    points.col(ring_points + i) = Eigen::Vector3f(static_cast<float>(-15.0 + 33.0 * unit(engine)),
+                                                  static_cast<float>(-14.0 + 33.0 * unit(engine)), static_cast<float>(noise(engine)));
+  ExtractionOptions extraction = extraction_preset("monument");
+  extraction.sensor_origin = Eigen::Vector3d(1.5, -40.0, 40.0);  // a station above, seeing the roof's outside
+
+  PointCloud cloud;
+  cloud.positions = points;
+  const ExtractionResult whole = extract_elements(cloud, extraction);
+  std::map<QuadricType, int> whole_counts;
+  for (const Element& element : whole.elements) ++whole_counts[element.detected_type];
+  ASSERT_EQ(whole_counts[QuadricType::CircularCone], 1);
+
+  MatrixChunkSource source(points, "ring");
+  tiling.tile_size = 6.0;  // five strips across the ring
+  const PartialModel part = model_tile_group(source, extraction, tiling);
+  std::size_t curved_pieces = 0;
+  for (const TilePiece& piece : part.pieces) curved_pieces += piece.type != QuadricType::Plane ? 1 : 0;
+  EXPECT_GE(curved_pieces, 4u);  // the tiles did cut the ring
+  const ModellingResult merged = merge_partial_models({part}, extraction, scene_modelling());
+  std::map<QuadricType, int> counts = type_counts(merged.model);
+  EXPECT_EQ(counts[QuadricType::CircularCone], 1);
+  EXPECT_EQ(counts[QuadricType::CircularCylinder], 0);
+  EXPECT_EQ(counts[QuadricType::Sphere], 0);
+  for (std::size_t i = 0; i < merged.model.augmented_begin; ++i) {
+    if (merged.model.types[i] != QuadricType::CircularCone) continue;
+    // One cone holds the ring's points from every tile, at the ring's apex.
+    EXPECT_GT(merged.model.element_point_counts[i], 0.9 * ring_points);
+    const QuadricDecomposition shape = merged.model.records[i].quadric().decompose();
+    EXPECT_LT((shape.center - apex).norm(), 0.1) << shape.center.transpose();
+    EXPECT_NEAR(shape.scale.x(), std::tan(angle), 0.01);
+  }
+}
+
+// The merge rules of pass 3 that do not trust a piece's own parameters: a sliver of a roof ring
+// whose tile fitted a cone tilted by 8 degrees (beyond the merge angle) joins the ring the other
+// piece's cone explains; a band of the ring a tile took for a tilted cylinder joins it too; and a
+// "cone" on the corner of three faces (two walls and a strip of the floor above a step, which no
+// two planes explain) is dissolved.
+TEST(TiledMerge, SliversAndCylinderBandsJoinTheirConeAndAThreeFaceCornerIsNoCone) {
+  const ShapeDetectionOptions options = extraction_preset("monument").shapes;
+  const Eigen::Vector3d apex(0.0, 0.0, 30.0), down(0.0, 0.0, -1.0);
+  const double angle = 26.565 * kPi / 180.0;
+  std::vector<detail::ShapePiece> pieces(4);
+  // The ring's well-fitted piece (a third of it) and a 10-degree sliver with a tilted cone; the
+  // sliver is the heavier piece (a dense strip in front of a station).
+  pieces[0].type = QuadricType::CircularCone;
+  pieces[0].points = cone_points(apex, down, angle, 20.0, 28.0, 0.0, 2.0 * kPi / 3.0, 1000, 31);
+  pieces[0].axis = down;
+  pieces[0].point = apex;
+  pieces[0].size = angle;
+  pieces[0].weight = 30000.0;
+  pieces[1].type = QuadricType::CircularCone;
+  pieces[1].points = cone_points(apex, down, angle, 20.0, 28.0, -0.2, -0.025, 1000, 32);
+  pieces[1].axis = Eigen::AngleAxisd(8.0 * kPi / 180.0, Eigen::Vector3d::UnitY()) * down;
+  pieces[1].point = apex + Eigen::Vector3d(-3.0, 0.0, -6.0);
+  pieces[1].size = angle + 6.0 * kPi / 180.0;
+  pieces[1].weight = 90000.0;
+  // A band of the ring on the far side, as a cylinder tilted 25 degrees.
+  pieces[2].type = QuadricType::CircularCylinder;
+  pieces[2].points = cone_points(apex, down, angle, 22.0, 26.0, 2.2, 2.5, 600, 33);
+  pieces[2].axis = Eigen::AngleAxisd(25.0 * kPi / 180.0, Eigen::Vector3d::UnitX()) * down;
+  pieces[2].point = pieces[2].points.rowwise().mean() + Eigen::Vector3d(0.0, 0.0, 0.0);
+  pieces[2].size = 12.0;
+  pieces[2].weight = 5000.0;
+  // Walls x = 40 (y in [0, 3], z in [1, 1.5]) and y = 3 (x in [40, 44], z in [0, 1.5]) and the floor
+  // z = 1.5 above the step (x in [40, 41], y in [0, 3]): a 45-degree cone around the corner's bisector.
+  detail::ShapePiece& corner = pieces[3];
+  corner.type = QuadricType::CircularCone;
+  corner.points.resize(3, 900);
+  std::mt19937_64 engine(34);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (Eigen::Index i = 0; i < corner.points.cols(); ++i) {
+    const int face = static_cast<int>(i % 9);
+    corner.points.col(i) = face < 4   ? Eigen::Vector3d(40.0, 3.0 * unit(engine), 1.0 + 0.5 * unit(engine))
+                           : face < 8 ? Eigen::Vector3d(40.0 + 4.0 * unit(engine), 3.0, 1.5 * unit(engine))
+                                      : Eigen::Vector3d(40.0 + unit(engine), 3.0 * unit(engine), 1.5);
+  }
+  corner.axis = Eigen::Vector3d(1.0, -1.0, 0.0).normalized();
+  corner.point = Eigen::Vector3d(40.0, 3.0, 1.0);
+  corner.size = 0.25 * kPi;
+  corner.weight = 1600.0;
+  const std::vector<int> joined = detail::merge_shape_pieces(pieces, options, Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(joined.size(), 4u);
+  EXPECT_EQ(joined[1], joined[0]);  // the sliver and the third are one ring
+  EXPECT_GE(joined[0], 0);
+  EXPECT_EQ(joined[2], joined[0]);  // the cylinder band joined it
+  EXPECT_EQ(joined[3], -1);         // the three-face corner is dissolved
+  const detail::ShapePiece& ring = pieces[static_cast<std::size_t>(joined[0])];
+  EXPECT_NEAR(ring.size, angle, 0.2 * kPi / 180.0);
+  EXPECT_LT((ring.point - apex).norm(), 0.05);
+  EXPECT_GT(std::abs(ring.axis.z()), std::cos(0.2 * kPi / 180.0));
+}
+
 TEST_F(TiledModelling, BadInputIsAClearError) {
   int group = 0, groups = 0;
   parse_tile_group("2/5", group, groups);
