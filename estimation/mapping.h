@@ -50,13 +50,13 @@ struct MapOptions {
   double joint_radius = 30.0;                  ///< radius of that search around each scan's current map position, m (covers the placement's error: sessions placed by a few edges lie a few metres off)
   double joint_gate_translation = 10.0;        ///< a joint-frame edge stays out of the graph when its translation departs from the relative pose of the current map poses by more than this, m
   double joint_gate_rotation_degrees = 15.0;   ///< or its rotation by more than this, degrees
-  bool use_ambiguous_joint_edges = true;       ///< ambiguous edges of the joint-frame rounds that pass the ambiguous gate (ambiguous_gate_*) enter the graph as switchable edges (cross-sensor pairs of one place are right but rarely `ok`: docs/mapping.md)
+  bool use_ambiguous_joint_edges = true;       ///< ambiguous edges of the joint-frame rounds that pass the ambiguous gate (ambiguous_gate_*) enter the graph, under Huber as `ok` ones (cross-sensor pairs of one place are right but rarely `ok`: docs/mapping.md)
   double ambiguous_gate_translation = 5.0;     ///< an ambiguous loop edge within a session or of the joint-frame rounds enters the graph only when its translation departs from the relative pose of the map solved without ambiguous edges by at most this, m (tuning town drive: right ones depart by at most 3.8 m, wrong ones by 20-80 m; docs/mapping.md)
   double ambiguous_gate_rotation_degrees = 5.0;///< and its rotation by at most this, degrees (right ones at most 5.4 deg on the tuning drive when joined by few edges, 2.2 deg within sessions)
   // Odometry when none is given.
   bool register_consecutive = true;            ///< sessions without odometry are registered scan to scan
   // Loop edges into the graph.
-  bool use_ambiguous_edges = true;             ///< ambiguous loop edges within a session enter the graph as switchable edges under DCS (else only `ok` ones): on the BALM walk's validation seeds the RPE fell from 0.67 to 0.57 % and 0.52 to 0.47 % (docs/mapping.md)
+  bool use_ambiguous_edges = true;             ///< ambiguous loop edges within a session enter the graph when they pass the odometry gate and arbitrate_ambiguous_edges, under Huber as `ok` ones (else only `ok` ones): on the BALM walk's validation seeds the RPE fell from 0.67 to 0.57 % and 0.52 to 0.47 % (docs/mapping.md)
   bool use_ambiguous_edges_across_sessions = false;  ///< ambiguous loop edges between sessions enter the graph too (off: nothing arbitrates them, no odometry joins two sessions, and on the three-sensor town drive 884 of 903 were wrong and placed the sessions 197 m off, docs/mapping.md)
   double odometry_gate_sigmas = 5.0;           ///< a loop edge within a session stays out of the graph when its rotation or translation departs from the odometry's relative pose by more than this many of the odometry drift's standard deviations over the path between the two scans (consistent_with_odometry; 0: no gate)
   double loop_translation_sigma = 0.1;         ///< standard deviation of a loop edge's translation, m (fixed information: loop_information_from_registration off, or an answer without inliers)
