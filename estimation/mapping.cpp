@@ -806,7 +806,8 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     joint_edges_begin = first_joint_edge;
     // Whether a joint-frame edge agrees with the current map: `ok` ones within joint_gate_* (the
     // placement's error), ambiguous ones within the tighter ambiguous_gate_* (they have only the map
-    // to vouch for them). Returns the departure as a note.
+    // to vouch for them). Sets `used`; returns the departure (for the note) and whether the gate
+    // kept out an `ok` or ambiguous answer.
     const auto judge = [&](MapEdge& edge, std::size_t round) {
       const auto [rotation, translation] =
           departure_between(edge.transform, result.poses[edge.to].inverse() * result.poses[edge.from]);
