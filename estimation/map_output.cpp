@@ -153,7 +153,7 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
   for (std::size_t round = 0; round < result.joint_rounds.size(); ++round) {
     const JointRound& joint = result.joint_rounds[round];
     json << (round == 0 ? "" : ", ") << "{\"candidates\": " << joint.candidates << ", \"registered\": " << joint.registered
-         << ", \"ok\": " << joint.ok << ", \"ambiguous\": " << joint.ambiguous << ", \"gated\": " << joint.gated
+         << ", \"ok\": " << joint.ok << ", \"ambiguous\": " << joint.ambiguous << ", \"gated\": " << joint.gated << ", \"readmitted\": " << joint.readmitted
          << ", \"used\": " << joint.used << ", \"sessions_in_map_frame\": " << joint.sessions_in_map_frame << "}";
   }
   json << "],\n  \"edges\": {";
@@ -182,6 +182,8 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
        << ", \"joint_gate_translation\": " << json_number(options.joint_gate_translation)
        << ", \"joint_gate_rotation_degrees\": " << json_number(options.joint_gate_rotation_degrees)
        << ", \"use_ambiguous_joint_edges\": " << (options.use_ambiguous_joint_edges ? "true" : "false")
+       << ", \"ambiguous_gate_translation\": " << json_number(options.ambiguous_gate_translation)
+       << ", \"ambiguous_gate_rotation_degrees\": " << json_number(options.ambiguous_gate_rotation_degrees)
        << ", \"dcs_phi\": " << json_number(options.graph.dcs_phi) << "}";
   if (!evaluation_json.empty()) json << ",\n  \"evaluation\": " << evaluation_json;
   json << "\n}\n";

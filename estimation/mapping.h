@@ -50,11 +50,13 @@ struct MapOptions {
   double joint_radius = 30.0;                  ///< radius of that search around each scan's current map position, m (covers the placement's error: sessions placed by a few edges lie a few metres off)
   double joint_gate_translation = 10.0;        ///< a joint-frame edge stays out of the graph when its translation departs from the relative pose of the current map poses by more than this, m
   double joint_gate_rotation_degrees = 15.0;   ///< or its rotation by more than this, degrees
-  bool use_ambiguous_joint_edges = false;      ///< ambiguous edges of the joint-frame rounds that pass the gate enter the graph as switchable edges
+  bool use_ambiguous_joint_edges = true;       ///< ambiguous edges of the joint-frame rounds that pass the ambiguous gate (ambiguous_gate_*) enter the graph, under Huber as `ok` ones (cross-sensor pairs of one place are right but rarely `ok`: docs/mapping.md)
+  double ambiguous_gate_translation = 5.0;     ///< an ambiguous loop edge within a session or of the joint-frame rounds enters the graph only when its translation departs from the relative pose of the map solved without ambiguous edges by at most this, m (tuning town drive: right ones depart by at most 3.8 m, wrong ones by 20-80 m; docs/mapping.md)
+  double ambiguous_gate_rotation_degrees = 5.0;///< and its rotation by at most this, degrees (right ones at most 5.4 deg on the tuning drive when joined by few edges, 2.2 deg within sessions)
   // Odometry when none is given.
   bool register_consecutive = true;            ///< sessions without odometry are registered scan to scan
   // Loop edges into the graph.
-  bool use_ambiguous_edges = true;             ///< ambiguous loop edges within a session enter the graph as switchable edges under DCS (else only `ok` ones): on the BALM walk's validation seeds the RPE fell from 0.67 to 0.57 % and 0.52 to 0.47 % (docs/mapping.md)
+  bool use_ambiguous_edges = true;             ///< ambiguous loop edges within a session enter the graph when they pass the odometry gate and arbitrate_ambiguous_edges, under Huber as `ok` ones (else only `ok` ones): on the BALM walk's validation seeds the RPE fell from 0.67 to 0.57 % and 0.52 to 0.47 % (docs/mapping.md)
   bool use_ambiguous_edges_across_sessions = false;  ///< ambiguous loop edges between sessions enter the graph too (off: nothing arbitrates them, no odometry joins two sessions, and on the three-sensor town drive 884 of 903 were wrong and placed the sessions 197 m off, docs/mapping.md)
   double odometry_gate_sigmas = 5.0;           ///< a loop edge within a session stays out of the graph when its rotation or translation departs from the odometry's relative pose by more than this many of the odometry drift's standard deviations over the path between the two scans (consistent_with_odometry; 0: no gate)
   double loop_translation_sigma = 0.1;         ///< standard deviation of a loop edge's translation, m (fixed information: loop_information_from_registration off, or an answer without inliers)
@@ -77,14 +79,28 @@ struct MapOptions {
 /// the odometry lie between the scans. With the drift's standard deviations σ_r = max(floor, rotation
 /// drift · path) and σ_t = max(floor, translation drift · path) (MapOptions::odometry_*), the edge
 /// agrees when its rotation departs by at most k σ_r and its translation by at most k σ_t + path ·
-/// sin(min(k σ_r, 90°)) (the rotation's lever arm), k = options.odometry_gate_sigmas. Over a long path
-/// the gate opens (k σ_r ≥ 180°): a loop after a long drive is the registration's to judge. `why`
-/// (when given) receives the departure and the limits when the edge does not agree.
+/// sin(min(θ + k floor_r, 90°)), θ its rotation's departure (the lever arm: a heading error θ moves a
+/// point L metres along the path by at most L sin θ), k = options.odometry_gate_sigmas. Over a long path
+/// the rotation's limit opens (k σ_r ≥ 180°): a loop after a long drive is the registration's to judge,
+/// but its translation must still fit the rotation it departs by. `why` (when given) receives the
+/// departure and the limits when the edge does not agree.
 bool consistent_with_odometry(const Eigen::Isometry3d& measured, const Eigen::Isometry3d& predicted, double path,
                               const MapOptions& options, std::string* why = nullptr);
 
 /// Kind of an edge.
 enum class MapEdgeKind { Odometry, Loop };
+
+struct MapEdge;
+
+/// The second-stage gate of ambiguous loop edges within a session: the pose graph of the used
+/// edges but those (odometry, `ok` loop edges, and whatever else is used) is solved from `initial`,
+/// and each used `ambiguous` loop edge within a session stays used only when its rotation and
+/// translation depart from that map's relative pose by at most options.ambiguous_gate_rotation_degrees
+/// and ambiguous_gate_translation; the others are marked unused with the departure in their note.
+/// Unlike consistent_with_odometry, whose allowance grows with the path, this allowance is fixed: an
+/// ambiguous edge has only the map of the sure edges to vouch for it. Returns the edges refused.
+std::size_t arbitrate_ambiguous_edges(std::vector<MapEdge>& edges, const std::vector<Eigen::Isometry3d>& initial,
+                                      const MapOptions& options);
 
 /// One edge of the map: a relative pose between two scans.
 struct MapEdge {
@@ -114,7 +130,8 @@ struct JointRound {
   std::size_t ok = 0;                          ///< of those, `ok`
   std::size_t ambiguous = 0;                   ///< of those, `ambiguous`
   std::size_t gated = 0;                       ///< `ok` or `ambiguous` ones the joint-frame gate kept out
-  std::size_t used = 0;                        ///< edges of this round that entered the graph
+  std::size_t used = 0;                        ///< edges of this round that entered the graph (readmitted ones included)
+  std::size_t readmitted = 0;                  ///< of those, edges of earlier rounds beyond the gate then that agree with this round's map
   std::size_t sessions_in_map_frame = 0;       ///< sessions joined to the first after this round's solve
 };
 

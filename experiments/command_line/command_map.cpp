@@ -70,7 +70,10 @@ int run_on_scheduler(const MapCommandOptions& options) {
                                      number(options.map.minimum_candidate_spacing), "--information-scale",
                                      number(options.map.loop_information_scale), "--odometry-gate",
                                      number(options.map.odometry_gate_sigmas), "--joint-rounds", std::to_string(options.map.joint_rounds),
-                                     "--joint-radius", number(options.map.joint_radius)});
+                                     "--joint-radius", number(options.map.joint_radius), "--ambiguous-gate-translation",
+                                     number(options.map.ambiguous_gate_translation), "--ambiguous-gate-rotation",
+                                     number(options.map.ambiguous_gate_rotation_degrees)});
+  if (!options.map.use_ambiguous_joint_edges) arguments.push_back("--no-ambiguous-joint-edges");
   if (!options.map.use_ambiguous_edges) arguments.push_back("--no-ambiguous-edges");
   if (options.map.use_ambiguous_edges_across_sessions) arguments.push_back("--ambiguous-edges-across-sessions");
   if (options.map.loop_information_from_registration) arguments.push_back("--registration-information");
@@ -211,6 +214,17 @@ const CommandRegistration registration(75, [](CLI::App& app) {
                       "Rounds of loop candidates across sessions by radius search in the joint map frame once placed (0: none)")
       ->capture_default_str();
   command->add_option("--joint-radius", options->map.joint_radius, "Radius of that search around each scan's map position, m")
+      ->capture_default_str();
+  command->add_flag("!--no-ambiguous-joint-edges", options->map.use_ambiguous_joint_edges,
+                    "Leave ambiguous edges of the joint-frame rounds out of the graph (default: in within the ambiguous gate, under DCS)");
+  command->add_option("--ambiguous-gate-translation", options->map.ambiguous_gate_translation,
+                      "An ambiguous loop edge (within a session, or of the joint-frame rounds) enters the graph only within this "
+                      "many metres of the map solved without it")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command->add_option("--ambiguous-gate-rotation", options->map.ambiguous_gate_rotation_degrees,
+                      "and within this many degrees")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_option("--map-voxel", options->map.map_voxel, "map.ply keeps one point per cube of this edge, m");
   command->callback([options] { run(*options); });

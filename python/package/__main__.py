@@ -38,6 +38,11 @@ def _parser():
     command.add_argument("--joint-rounds", type=int,
                          help="Rounds of loop candidates across sessions by radius search in the joint map frame (0: none)")
     command.add_argument("--joint-radius", type=float, help="Radius of that search around each scan's map position, m")
+    command.add_argument("--no-ambiguous-joint-edges", action="store_true",
+                         help="Leave ambiguous edges of the joint-frame rounds out of the graph")
+    command.add_argument("--ambiguous-gate-translation", type=float, help="An ambiguous loop edge enters the graph only within "
+                         "this many metres of the map solved without ambiguous edges")
+    command.add_argument("--ambiguous-gate-rotation", type=float, help="and within this many degrees")
     command.add_argument("--map-voxel", type=float, help="map.ply keeps one point per cube of this edge, m")
     return parser
 
@@ -49,7 +54,9 @@ def _options(arguments):
              "place_candidates": "place_candidates_per_scan", "map_voxel": "map_voxel",
              "maximum_loop_radius": "maximum_loop_radius", "candidate_spacing": "minimum_candidate_spacing",
              "information_scale": "loop_information_scale", "odometry_gate": "odometry_gate_sigmas",
-             "joint_rounds": "joint_rounds", "joint_radius": "joint_radius"}
+             "joint_rounds": "joint_rounds", "joint_radius": "joint_radius",
+             "ambiguous_gate_translation": "ambiguous_gate_translation",
+             "ambiguous_gate_rotation": "ambiguous_gate_rotation_degrees"}
     options = {"preset": arguments.preset}
     for argument, option in names.items():
         value = getattr(arguments, argument)
@@ -59,6 +66,8 @@ def _options(arguments):
         options["use_ambiguous_edges"] = False
     if arguments.ambiguous_edges_across_sessions:
         options["use_ambiguous_edges_across_sessions"] = True
+    if arguments.no_ambiguous_joint_edges:
+        options["use_ambiguous_joint_edges"] = False
     if arguments.registration_information:
         options["loop_information_from_registration"] = True
     return options

@@ -59,6 +59,8 @@ MapOptions map_options_from(const py::dict& keywords) {
       else if (key == "joint_gate_translation") options.joint_gate_translation = value.cast<double>();
       else if (key == "joint_gate_rotation_degrees") options.joint_gate_rotation_degrees = value.cast<double>();
       else if (key == "use_ambiguous_joint_edges") options.use_ambiguous_joint_edges = value.cast<bool>();
+      else if (key == "ambiguous_gate_translation") options.ambiguous_gate_translation = value.cast<double>();
+      else if (key == "ambiguous_gate_rotation_degrees") options.ambiguous_gate_rotation_degrees = value.cast<double>();
       else if (key == "register_consecutive") options.register_consecutive = value.cast<bool>();
       else if (key == "use_ambiguous_edges") options.use_ambiguous_edges = value.cast<bool>();
       else if (key == "use_ambiguous_edges_across_sessions") options.use_ambiguous_edges_across_sessions = value.cast<bool>();
@@ -449,7 +451,8 @@ progress: called as progress(stage, done, total) as scans are modelled and pairs
 Keyword options: the members of MapOptions (preset, loop_radius, loop_radius_growth,
 maximum_loop_radius, minimum_loop_travel, candidates_per_scan, minimum_candidate_spacing,
 place_candidates_per_scan, place_query_stride, joint_rounds, joint_radius, joint_gate_translation,
-joint_gate_rotation_degrees, use_ambiguous_joint_edges, register_consecutive, use_ambiguous_edges,
+joint_gate_rotation_degrees, use_ambiguous_joint_edges, ambiguous_gate_translation,
+ambiguous_gate_rotation_degrees, register_consecutive, use_ambiguous_edges,
 use_ambiguous_edges_across_sessions, odometry_gate_sigmas, loop_information_from_registration,
 loop_information_scale,
 loop_translation_sigma, loop_rotation_sigma_degrees, odometry_translation_drift,
