@@ -710,9 +710,13 @@ TEST(AmbiguousEdgeGate, TheMapOfTheSureEdgesRefusesATurnedEdgeTheOdometryGateLet
     EXPECT_EQ(arbitrate_ambiguous_edges(judged, odometry, options), 1u) << "seed " << seed;
     EXPECT_FALSE(judged[wrong].used) << "seed " << seed;
     EXPECT_NE(judged[wrong].note.find("departs from the map of the sure edges"), std::string::npos) << judged[wrong].note;
-    for (std::size_t index : right) EXPECT_TRUE(judged[index].used) << "seed " << seed << ": right ambiguous edge " << index << " refused: " << judged[index].note;
-    for (std::size_t index = 0; index < edges.size(); ++index)
-      if (edges[index].status != "ambiguous") EXPECT_TRUE(judged[index].used) << "only ambiguous edges are judged";
+    for (std::size_t index : right)
+      EXPECT_TRUE(judged[index].used) << "seed " << seed << ": right ambiguous edge " << index << " refused: " << judged[index].note;
+    for (std::size_t index = 0; index < edges.size(); ++index) {
+      if (edges[index].status != "ambiguous") {
+        EXPECT_TRUE(judged[index].used) << "only ambiguous edges are judged";
+      }
+    }
     // Ambiguous edges across sessions are not this gate's (the joint-frame rounds judge those).
     std::vector<MapEdge> across = edges;
     across[wrong].across_sessions = true;
