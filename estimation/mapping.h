@@ -10,7 +10,8 @@
 //             placed in the map frame, by radius search there (rounds, each followed by a solve),
 //   register  candidate pairs from their cached models (register_models), verified on the clouds
 //             loaded on demand (verify_registration),
-//   optimise  the pose graph (optimise_pose_graph; loop edges under DCS),
+//   optimise  the pose graph (optimise_pose_graph; loop edges that are ok or vouched for by a map
+//             under Huber, other ambiguous ones under DCS),
 //   write     poses.tsv, edges.csv, report.json, map.ply and the merged quadric model.
 #pragma once
 

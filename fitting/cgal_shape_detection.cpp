@@ -654,6 +654,24 @@ void replace_by_simplest_quadrics(std::vector<DetectedShape>& shapes, const Eige
   }
 }
 
+/// Joins `piece` to `cone` when the cone, refined on the points of both from its own parameters,
+/// stays at least `minimum_angle` wide and explains them all: `cone` then holds both pieces' points
+/// and box and `piece` is left empty. Returns whether it joined.
+bool join_into_cone(DetectedShape& cone, DetectedShape& piece, const Eigen::Matrix3Xd& points,
+                    const ShapeDetectionOptions& options, double minimum_angle) {
+  std::vector<std::uint32_t> united = cone.members;
+  united.insert(united.end(), piece.members.begin(), piece.members.end());
+  DetectedShape joined = cone;
+  if (!refine_cone(points, united, joined) || joined.size < minimum_angle || !explains(joined, points, united, options))
+    return false;
+  joined.members = std::move(united);
+  joined.lower = cone.lower.cwiseMin(piece.lower);
+  joined.upper = cone.upper.cwiseMax(piece.upper);
+  cone = std::move(joined);
+  piece.members.clear();
+  return true;
+}
+
 /// A band of a wide cone close to a station can come back as a tilted cylinder whose own cone fit
 /// (from noisy normals) goes astray, while a smaller patch of the same cone is found as a cone
 /// (whose angle a small patch pins down poorly). When the cone, refined on the points of both from
@@ -666,17 +684,7 @@ void join_cylinder_pieces_to_cones(std::vector<DetectedShape>& shapes, const Eig
     if (cone.type != QuadricType::CircularCone || cone.size < minimum_angle) continue;
     for (DetectedShape& piece : shapes) {
       if (piece.type != QuadricType::CircularCylinder || piece.members.empty()) continue;
-      std::vector<std::uint32_t> united = cone.members;
-      united.insert(united.end(), piece.members.begin(), piece.members.end());
-      DetectedShape joined = cone;
-      if (!refine_cone(simplified, united, joined) || joined.size < minimum_angle ||
-          !explains(joined, simplified, united, shape_options))
-        continue;
-      joined.members = std::move(united);
-      joined.lower = cone.lower.cwiseMin(piece.lower);
-      joined.upper = cone.upper.cwiseMax(piece.upper);
-      cone = std::move(joined);
-      piece.members.clear();
+      join_into_cone(cone, piece, simplified, shape_options, minimum_angle);
     }
   }
 }
@@ -996,16 +1004,7 @@ std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const Shape
           ((piece.lower - cone.upper).array() > options.cluster_epsilon).any() ||
           ((cone.lower - piece.upper).array() > options.cluster_epsilon).any() || !explains(cone, points, piece.members, options))
         continue;
-      std::vector<std::uint32_t> united = cone.members;
-      united.insert(united.end(), piece.members.begin(), piece.members.end());
-      DetectedShape joined = cone;
-      if (!refine_cone(points, united, joined) || joined.size < minimum_angle || !explains(joined, points, united, options))
-        continue;
-      joined.members = std::move(united);
-      joined.lower = cone.lower.cwiseMin(piece.lower);
-      joined.upper = cone.upper.cwiseMax(piece.upper);
-      cone = std::move(joined);
-      piece.members.clear();
+      join_into_cone(cone, piece, points, options, minimum_angle);
     }
   }
   // Joined pieces: each sorted piece's first point tells which kept shape now holds it.

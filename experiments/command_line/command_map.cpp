@@ -203,7 +203,7 @@ const CommandRegistration registration(75, [](CLI::App& app) {
   command->add_option("--candidates-per-scan", options->map.candidates_per_scan, "Loop candidates registered per scan within a session");
   command->add_option("--place-candidates", options->map.place_candidates_per_scan, "Candidates per scan across sessions (place descriptor)");
   command->add_flag("!--no-ambiguous-edges", options->map.use_ambiguous_edges,
-                    "Leave ambiguous loop edges within a session out of the graph (default: in, as switchable edges under DCS)");
+                    "Leave ambiguous loop edges within a session out of the graph (default: in when they pass the odometry gate and agree with the map of the sure edges, under Huber)");
   command->add_flag("--ambiguous-edges-across-sessions", options->map.use_ambiguous_edges_across_sessions,
                     "Let ambiguous loop edges between sessions into the graph too (default: out; no odometry arbitrates them)");
   command->add_option("--odometry-gate", options->map.odometry_gate_sigmas,
@@ -216,7 +216,7 @@ const CommandRegistration registration(75, [](CLI::App& app) {
   command->add_option("--joint-radius", options->map.joint_radius, "Radius of that search around each scan's map position, m")
       ->capture_default_str();
   command->add_flag("!--no-ambiguous-joint-edges", options->map.use_ambiguous_joint_edges,
-                    "Leave ambiguous edges of the joint-frame rounds out of the graph (default: in within the ambiguous gate, under DCS)");
+                    "Leave ambiguous edges of the joint-frame rounds out of the graph (default: in within the ambiguous gate, under Huber)");
   command->add_option("--ambiguous-gate-translation", options->map.ambiguous_gate_translation,
                       "An ambiguous loop edge (within a session, or of the joint-frame rounds) enters the graph only within this "
                       "many metres of the map solved without it")
