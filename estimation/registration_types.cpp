@@ -2,6 +2,7 @@
 #include "estimation/registration_types.h"
 
 #include "geometry/error.h"
+#include "geometry/output_paths.h"
 
 #include <cmath>
 
@@ -43,6 +44,24 @@ PointCloud centred_on_sensor(PointCloud cloud, const Eigen::Vector3d& sensor_ori
   for (Eigen::Index i = 0; i < cloud.positions.cols(); ++i)
     cloud.positions.col(i) = (cloud.positions.col(i).cast<double>() + shift).cast<float>();
   return cloud;
+}
+
+PointCloud in_modelling_frame(const PointCloud& cloud, const ModellingFrame& frame, const std::string& what) {
+  PointCloud moved;
+  if (!frame.sensor_origin.isZero(0.0)) {
+    moved = centred_on_sensor(cloud, frame.sensor_origin);
+    require_finite_points(moved, what);
+  } else {
+    moved = cloud;
+  }
+  if (frame.metres_per_unit != 1.0) moved.positions *= static_cast<float>(frame.metres_per_unit);
+  return moved;
+}
+
+SceneModel in_file_frame(SceneModel model, const ModellingFrame& frame, const Eigen::Vector3d& local_origin) {
+  if (frame.metres_per_unit != 1.0) model = scaled(std::move(model), 1.0 / frame.metres_per_unit);
+  const Eigen::Vector3d offset = frame.sensor_origin.isZero(0.0) ? local_origin : frame.sensor_origin;
+  return offset.isZero(0.0) ? model : translated(std::move(model), offset);
 }
 
 Eigen::Isometry3d between_cloud_frames(const Eigen::Isometry3d& between_sensors, const Eigen::Vector3d& source_origin,

@@ -230,6 +230,23 @@ void apply_registration_status(RegistrationResult& result);
 /// double) and the result has none. Throws quadrix::Error for a non-finite origin.
 PointCloud centred_on_sensor(PointCloud cloud, const Eigen::Vector3d& sensor_origin);
 
+/// Where and in what unit a cloud given in its file's frame is modelled: centred on its sensor and
+/// in metres, the frame and unit every preset's lengths mean.
+struct ModellingFrame {
+  Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();  ///< where the sensor stood, file coordinates (zero: not centred)
+  double metres_per_unit = 1.0;                              ///< the file's length unit in metres (a LAS file in feet: 0.3048)
+  /// Whether a cloud must be copied to be modelled (centred or scaled).
+  bool moves() const { return !sensor_origin.isZero(0.0) || metres_per_unit != 1.0; }
+};
+
+/// A copy of `cloud` in `frame`: centred_on_sensor when frame.sensor_origin is not zero (then checked
+/// for finite points, quadrix::Error naming `what` otherwise), positions scaled to metres.
+PointCloud in_modelling_frame(const PointCloud& cloud, const ModellingFrame& frame, const std::string& what);
+
+/// A model made in `frame` of a cloud read relative to `local_origin`, back in the file's unit and
+/// coordinates: scaled by 1 / metres_per_unit, then moved by the sensor origin (or the local origin).
+SceneModel in_file_frame(SceneModel model, const ModellingFrame& frame, const Eigen::Vector3d& local_origin);
+
 /// A transform between sensor-centred clouds (centred_on_sensor) as one between the clouds' own
 /// frames: Tr(target_origin) * between_sensors * Tr(-source_origin).
 Eigen::Isometry3d between_cloud_frames(const Eigen::Isometry3d& between_sensors, const Eigen::Vector3d& source_origin,

@@ -705,15 +705,10 @@ void run(const ModelCommandOptions& options) {
   // A cloud in a map's frame is modelled centred on its sensor (the extraction measures ranges and
   // heights from the origin), and the model is moved back: every output is in the file's frame.
   // One copy at most, centred and/or in metres; `cloud` stays in the file's frame and unit.
-  PointCloud moved;
-  if (centred) {
-    moved = centred_on_sensor(cloud, sensor_origin);
-    require_finite_points(moved, "--sensor-origin moved " + options.inputs.front());
-  } else if (rescaled) {
-    moved = cloud;
-  }
-  if (rescaled) moved.positions *= static_cast<float>(units.metres_per_unit);
-  const PointCloud& modelled = centred || rescaled ? moved : cloud;
+  const ModellingFrame frame{sensor_origin, units.metres_per_unit};
+  const PointCloud moved = frame.moves() ? in_modelling_frame(cloud, frame, "--sensor-origin moved " + options.inputs.front())
+                                         : PointCloud();
+  const PointCloud& modelled = frame.moves() ? moved : cloud;
   // The library's preset resolution (as `register` and Python's model() do it): a named preset, or
   // auto measured on the cloud (its up axis and platform crop set on the extraction), then --config.
   std::string notes;
@@ -748,9 +743,7 @@ void run(const ModelCommandOptions& options) {
   std::vector<std::uint32_t> score_labels;
   if (!options.score_labels.empty()) score_labels = read_semantic_kitti_labels(options.score_labels, cloud.size());
   ModellingResult result = model_scene(modelled, extraction, modelling, labels);
-  if (rescaled) result.model = scaled(std::move(result.model), 1.0 / units.metres_per_unit);
-  if (centred) result.model = translated(std::move(result.model), sensor_origin);
-  else if (!cloud.local_origin.isZero(0.0)) result.model = translated(std::move(result.model), cloud.local_origin);
+  result.model = in_file_frame(std::move(result.model), frame, cloud.local_origin);
   const SceneModel& model = result.model;
   std::optional<ClassScores> scores;
   if (!options.score_labels.empty()) scores = score_element_classes(modelled, result.extraction, score_labels, extraction);

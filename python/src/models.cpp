@@ -200,19 +200,11 @@ when it is not a valid model (bad magic, truncation, checksum mismatch, invalid 
         // A file is read relative to a local origin (georeferenced coordinates stay exact in float32).
         const PointCloud& given = cloud_from_object(cloud, "cloud", holder, nullptr, LocalOrigin::Auto);
         // As `quadrix model --sensor-origin`: modelled centred on the sensor, the model moved back.
-        const Eigen::Vector3d origin = point_from_object(sensor_origin, "sensor_origin");
-        const bool centred = !origin.isZero(0.0);
         // As `quadrix model`: coordinates in another unit (a LAS file in feet) are modelled in metres,
-        // the presets' unit, and the model is returned in the cloud's unit. One copy at most.
-        const double metres_per_unit = holder->units.metres_per_unit;
-        const bool rescaled = metres_per_unit != 1.0;
-        PointCloud moved;
-        if (centred)
-          moved = centred_on_sensor(given, origin);
-        else if (rescaled)
-          moved = given;
-        if (rescaled) moved.positions *= static_cast<float>(metres_per_unit);
-        const PointCloud& points = centred || rescaled ? moved : given;
+        // the presets' unit, and the model is returned in the cloud's frame and unit. One copy at most.
+        const ModellingFrame frame{point_from_object(sensor_origin, "sensor_origin"), holder->units.metres_per_unit};
+        const PointCloud moved = frame.moves() ? in_modelling_frame(given, frame, "sensor_origin moved the cloud") : PointCloud();
+        const PointCloud& points = frame.moves() ? moved : given;
         RegistrationOptions options = registration_options_from(preset, points, preset, points, config, py::none(), nullptr);
         ExtractionOptions extraction = options.source_extraction;
         if (!holder->units.las) extraction.ground_class = -1;  // only a LAS file's labels are ASPRS classes
@@ -226,13 +218,7 @@ when it is not a valid model (bad magic, truncation, checksum mismatch, invalid 
         {
           py::gil_scoped_release release;
           ModellingResult modelling = model_scene(points, extraction, options.modelling, point_labels);
-          SceneModel model = std::move(modelling.model);
-          if (rescaled) model = scaled(std::move(model), 1.0 / metres_per_unit);
-          if (centred)
-            model = translated(std::move(model), origin);
-          else if (!given.local_origin.isZero(0.0))
-            model = translated(std::move(model), given.local_origin);
-          result->model = std::move(model);
+          result->model = in_file_frame(std::move(modelling.model), frame, given.local_origin);
           result->status = modelling_status_name(modelling.status);
           result->message = std::move(modelling.message);
         }
