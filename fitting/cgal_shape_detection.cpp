@@ -409,11 +409,16 @@ void update_bounds(const Eigen::Matrix3Xd& points, DetectedShape& shape) {
   }
 }
 
+/// Whether the bounding boxes of `a` and `b` lie within `gap` of each other on every axis.
+bool boxes_within(const DetectedShape& a, const DetectedShape& b, double gap) {
+  return !((b.lower - a.upper).array() > gap).any() && !((a.lower - b.upper).array() > gap).any();
+}
+
 /// Whether some point of `b` lies within `gap` of a point of `a` (points hashed in cells of `gap`).
 /// gap <= 0: always true.
 bool pieces_within(const Eigen::Matrix3Xd& points, const DetectedShape& a, const DetectedShape& b, double gap) {
   if (!(gap > 0.0)) return true;
-  if (((b.lower - a.upper).array() > gap).any() || ((a.lower - b.upper).array() > gap).any()) return false;
+  if (!boxes_within(a, b, gap)) return false;
   const DetectedShape& indexed = a.members.size() <= b.members.size() ? a : b;
   const DetectedShape& queried = a.members.size() <= b.members.size() ? b : a;
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
@@ -730,10 +735,8 @@ void merge_similar_shapes(std::vector<DetectedShape>& shapes, const Eigen::Matri
         // while the equal roof rings of a survey's buildings are not refitted pair by pair. A
         // narrow strip of a wide cone (a tile's sliver of a roof ring) pins its axis and angle down
         // poorly, so a piece also joins when the other's cone explains its points.
-        {
-          const double reach = std::max({shape_options.merge_plane_gap, (a.upper - a.lower).norm(), (b.upper - b.lower).norm()});
-          if (((b.lower - a.upper).array() > reach).any() || ((a.lower - b.upper).array() > reach).any()) return false;
-        }
+        if (!boxes_within(a, b, std::max({shape_options.merge_plane_gap, (a.upper - a.lower).norm(), (b.upper - b.lower).norm()})))
+          return false;
         return (a.axis.dot(b.axis) >= cos_angle && std::abs(a.size - b.size) <= shape_options.merge_angle_deg * kPi / 180.0) ||
                explains(a, simplified, b.members, shape_options) || explains(b, simplified, a.members, shape_options);
       default: return false;
@@ -1000,9 +1003,8 @@ std::vector<int> merge_shape_pieces(std::vector<ShapePiece>& pieces, const Shape
   for (DetectedShape& cone : shapes) {
     if (cone.type != QuadricType::CircularCone || cone.members.empty() || cone.size < minimum_angle) continue;
     for (DetectedShape& piece : shapes) {
-      if (piece.type != QuadricType::CircularCylinder || piece.members.empty() ||
-          ((piece.lower - cone.upper).array() > options.cluster_epsilon).any() ||
-          ((cone.lower - piece.upper).array() > options.cluster_epsilon).any() || !explains(cone, points, piece.members, options))
+      if (piece.type != QuadricType::CircularCylinder || piece.members.empty() || !boxes_within(cone, piece, options.cluster_epsilon) ||
+          !explains(cone, points, piece.members, options))
         continue;
       join_into_cone(cone, piece, points, options, minimum_angle);
     }
