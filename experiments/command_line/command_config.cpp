@@ -43,7 +43,7 @@ void run(const ConfigCommandOptions& options) {
     CloudReadOptions read_options;
     read_options.local_origin = LocalOrigin::Auto;
     cloud = read_point_cloud(options.cloud, read_options);
-    cloud.positions *= static_cast<float>(units.metres_per_unit);
+    if (units.metres_per_unit != 1.0) cloud.positions *= static_cast<float>(units.metres_per_unit);
   }
   std::string notes;
   RegistrationOptions registration = auto_without_cloud

@@ -311,6 +311,7 @@ TEST(AirborneLas, RegisterAndMapRefuseScansInFeet) {
   write_feet_las(folder.file("b.las"), nadir_scan(synthetic_roofs(), 0.2, 0.05, 12));
   {
     std::ofstream list(folder.file("scans.tsv"));
+    // One session of two scans without odometry (`-`): the refusal must come before any modelling.
     list << "session\tscan\todometry\n" << "s\ta.las\t-\n" << "s\tb.las\t-\n";
   }
   expect_refused(folder, "register '" + folder.file("a.las") + "' '" + folder.file("b.las") + "'", "registration",
