@@ -35,17 +35,19 @@ Streamed stream_all(const std::string& path, std::size_t chunk_points) {
   Streamed all;
   all.origin = stream->origin();
   PointChunk chunk;
+  // Positions gathered in a std::vector: growing the matrix chunk by chunk would copy it every time
+  // (quadratic under AddressSanitizer, whose realloc never extends in place).
+  std::vector<double> coordinates;
   while (stream->read(chunk_points, chunk)) {
     EXPECT_LE(chunk.size(), chunk_points);
-    const Eigen::Index at = all.positions.cols();
-    all.positions.conservativeResize(3, at + chunk.positions.cols());
-    all.positions.rightCols(chunk.positions.cols()) = chunk.positions;
+    coordinates.insert(coordinates.end(), chunk.positions.data(), chunk.positions.data() + chunk.positions.size());
     all.intensity.insert(all.intensity.end(), chunk.intensity.begin(), chunk.intensity.end());
     all.labels.insert(all.labels.end(), chunk.labels.begin(), chunk.labels.end());
     ++all.chunks;
   }
   EXPECT_EQ(chunk.size(), 0u);
   EXPECT_FALSE(stream->read(chunk_points, chunk));  // stays exhausted
+  all.positions = Eigen::Map<const Eigen::Matrix3Xd>(coordinates.data(), 3, static_cast<Eigen::Index>(coordinates.size() / 3));
   all.records = stream->records_read();
   all.dropped = stream->non_finite_dropped();
   if (stream->point_count()) {
