@@ -156,7 +156,19 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
          << ", \"ok\": " << joint.ok << ", \"ambiguous\": " << joint.ambiguous << ", \"gated\": " << joint.gated << ", \"readmitted\": " << joint.readmitted
          << ", \"used\": " << joint.used << ", \"sessions_in_map_frame\": " << joint.sessions_in_map_frame << "}";
   }
-  json << "],\n  \"edges\": {";
+  json << "],\n  \"information_groups\": [";
+  for (std::size_t g = 0; g < result.information_groups.size(); ++g) {
+    const InformationGroup& group = result.information_groups[g];
+    json << (g == 0 ? "" : ", ") << "{\"name\": " << json_string(group.name) << ", \"edges\": " << group.edges
+         << ", \"rotation_factor\": " << json_number(group.rotation_factor)
+         << ", \"translation_factor\": " << json_number(group.translation_factor)
+         << ", \"pooled\": " << (group.pooled ? "true" : "false") << ", \"measured\": " << (group.measured ? "true" : "false") << "}";
+  }
+  json << "],\n  \"calibration_costs\": [";
+  for (std::size_t round = 0; round < result.calibration_costs.size(); ++round)
+    json << (round == 0 ? "" : ", ") << json_number(result.calibration_costs[round]);
+  json << "],\n  \"calibration_converged\": " << (result.calibration_converged ? "true" : "false");
+  json << ",\n  \"edges\": {";
   first = true;
   for (const auto& [name, value] : counts) json << (first ? "" : ", ") << json_string(name) << ": " << value, first = false;
   json << "},\n  \"graph\": {\"initial_cost\": " << json_number(result.graph.initial_cost)
@@ -184,6 +196,9 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
        << ", \"use_ambiguous_joint_edges\": " << (options.use_ambiguous_joint_edges ? "true" : "false")
        << ", \"ambiguous_gate_translation\": " << json_number(options.ambiguous_gate_translation)
        << ", \"ambiguous_gate_rotation_degrees\": " << json_number(options.ambiguous_gate_rotation_degrees)
+       << ", \"information_rounds\": " << options.information_rounds
+       << ", \"information_minimum_edges\": " << options.information_minimum_edges
+       << ", \"information_tolerance\": " << json_number(options.information_tolerance)
        << ", \"dcs_phi\": " << json_number(options.graph.dcs_phi) << "}";
   if (!evaluation_json.empty()) json << ",\n  \"evaluation\": " << evaluation_json;
   json << "\n}\n";

@@ -10,10 +10,13 @@
 #include <ceres/manifold.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <numeric>
 
 namespace quadrix {
@@ -210,6 +213,177 @@ PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, cons
   for (std::size_t index = 0; index < edges.size(); ++index)
     summary.final_scale[index] = edges[index].switchable ? dcs_scale(summary.final_chi2[index], options.dcs_phi) : 1.0;
   return summary;
+}
+
+namespace {
+
+/// Median of `values` (the upper middle one for an even count); 0 when empty.
+double median_of(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+/// `pose` moved by a tangent step: translation + step.head(3), rotation exp(step.tail(3)) R.
+Eigen::Isometry3d perturbed(const Eigen::Isometry3d& pose, const Eigen::Matrix<double, 6, 1>& step) {
+  Eigen::Isometry3d moved = pose;
+  moved.translation() += step.head<3>();
+  const double angle = step.tail<3>().norm();
+  if (angle > 0.0) moved.linear() = Eigen::AngleAxisd(angle, step.tail<3>() / angle).toRotationMatrix() * pose.rotation();
+  return moved;
+}
+
+}  // namespace
+
+std::vector<EdgeRedundancy> edge_redundancies(const std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
+                                              const PoseGraphOptions& options) {
+  const std::size_t count = poses.size();
+  for (std::size_t k = 0; k < edges.size(); ++k)
+    if (edges[k].from >= count || edges[k].to >= count || edges[k].from == edges[k].to)
+      throw Error("edge_redundancies: edge " + std::to_string(k) + " names a pose that does not exist or joins a pose to itself");
+  // Gauge: the first pose of each connected component stays fixed, as in optimise_pose_graph.
+  const std::vector<std::size_t> component = pose_graph_components(count, edges);
+  std::vector<std::ptrdiff_t> column(count, -1);
+  std::vector<bool> gauge_taken(count, false);
+  Eigen::Index unknowns = 0;
+  for (std::size_t pose = 0; pose < count; ++pose) {
+    if (!gauge_taken[component[pose]]) {
+      gauge_taken[component[pose]] = true;
+      continue;
+    }
+    column[pose] = unknowns;
+    unknowns += 6;
+  }
+  // Each edge's Jacobian (central differences on the tangent steps of both poses) and weight W = ρ'(χ²) Ω.
+  constexpr double kStep = 1e-6;
+  std::vector<Eigen::Matrix<double, 6, 12>> jacobians(edges.size());
+  std::vector<Information6d> weights(edges.size());
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const PoseGraphEdge& edge = edges[k];
+    const Eigen::Matrix<double, 6, 1> error = pose_graph_error(poses[edge.from], poses[edge.to], edge.measurement);
+    const double chi2 = error.dot(edge.information * error);
+    const double weight = edge.switchable ? evaluate_robust_loss(RobustLoss::Dcs, options.dcs_phi, chi2).derivative
+                          : edge.robust   ? evaluate_robust_loss(RobustLoss::Huber, options.huber_threshold, chi2).derivative
+                                          : 1.0;
+    weights[k] = weight * edge.information;
+    for (int side = 0; side < 2; ++side)
+      for (int axis = 0; axis < 6; ++axis) {
+        Eigen::Matrix<double, 6, 1> step = Eigen::Matrix<double, 6, 1>::Zero();
+        step[axis] = kStep;
+        const bool from_side = side == 0;
+        const auto error_at = [&](const Eigen::Matrix<double, 6, 1>& delta) {
+          return pose_graph_error(from_side ? perturbed(poses[edge.from], delta) : poses[edge.from],
+                                  from_side ? poses[edge.to] : perturbed(poses[edge.to], delta), edge.measurement);
+        };
+        jacobians[k].col(6 * side + axis) = (error_at(step) - error_at(-step)) / (2.0 * kStep);
+      }
+    const Eigen::Matrix<double, 12, 12> block = jacobians[k].transpose() * weights[k] * jacobians[k];
+    const std::array<std::ptrdiff_t, 2> columns = {column[edge.from], column[edge.to]};
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) {
+        if (columns[a] < 0 || columns[b] < 0) continue;
+        for (int row = 0; row < 6; ++row)
+          for (int col = 0; col < 6; ++col)
+            triplets.emplace_back(columns[a] + row, columns[b] + col, block(6 * a + row, 6 * b + col));
+      }
+  }
+  std::vector<EdgeRedundancy> redundancy(edges.size());
+  if (unknowns == 0) return redundancy;  // every pose a gauge: nothing is estimated, every residual is the measurement's own
+  Eigen::SparseMatrix<double> normal(unknowns, unknowns);
+  normal.setFromTriplets(triplets.begin(), triplets.end());
+  // Sparse Cholesky of the normal matrix; the covariance blocks each edge needs come from solving for
+  // the six unit columns of each pose (the full inverse is dense, the blocks are not).
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(normal);
+  if (factor.info() != Eigen::Success) throw Error("edge_redundancies: the normal matrix of the graph is singular");
+  std::vector<Eigen::Matrix<double, 6, 6>> diagonal(count, Eigen::Matrix<double, 6, 6>::Zero());
+  std::vector<Eigen::Matrix<double, 6, 6>> cross(edges.size(), Eigen::Matrix<double, 6, 6>::Zero());  // C(to, from)
+  std::vector<std::vector<std::size_t>> edges_from(count);
+  for (std::size_t k = 0; k < edges.size(); ++k) edges_from[edges[k].from].push_back(k);
+  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(unknowns, 6);
+  for (std::size_t pose = 0; pose < count; ++pose) {
+    if (column[pose] < 0) continue;
+    unit.block(column[pose], 0, 6, 6).setIdentity();
+    const Eigen::MatrixXd solved = factor.solve(unit);
+    unit.block(column[pose], 0, 6, 6).setZero();
+    diagonal[pose] = solved.block(column[pose], 0, 6, 6);
+    for (const std::size_t k : edges_from[pose])
+      if (column[edges[k].to] >= 0) cross[k] = solved.block(column[edges[k].to], 0, 6, 6);
+  }
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const PoseGraphEdge& edge = edges[k];
+    Eigen::Matrix<double, 12, 12> covariance;
+    covariance << diagonal[edge.from], cross[k].transpose(), cross[k], diagonal[edge.to];
+    // Covariance of the estimated relative pose J C Jᵀ; r = 3 - tr(W_bb (J C Jᵀ)_bb) per block b.
+    const Information6d fitted = jacobians[k] * covariance * jacobians[k].transpose();
+    redundancy[k].rotation = 3.0 - (weights[k].topLeftCorner<3, 3>() * fitted.topLeftCorner<3, 3>()).trace();
+    redundancy[k].translation = 3.0 - (weights[k].bottomRightCorner<3, 3>() * fitted.bottomRightCorner<3, 3>()).trace();
+  }
+  return redundancy;
+}
+
+std::vector<VarianceFactors> estimate_variance_factors(const std::vector<Eigen::Isometry3d>& poses,
+                                                       const std::vector<PoseGraphEdge>& edges,
+                                                       const std::vector<std::size_t>& group, std::size_t group_count,
+                                                       const std::vector<std::size_t>& pool, std::size_t minimum_edges,
+                                                       const PoseGraphOptions& options) {
+  if (group.size() != edges.size())
+    throw Error("estimate_variance_factors: " + std::to_string(group.size()) + " group indices for " +
+                std::to_string(edges.size()) + " edges");
+  if (pool.size() != group_count) throw Error("estimate_variance_factors: one pool per group expected");
+  for (std::size_t k = 0; k < edges.size(); ++k)
+    if (group[k] >= group_count) throw Error("estimate_variance_factors: edge " + std::to_string(k) + " names no group");
+  // Median of χ² with 3 degrees of freedom: the robust estimate's reference.
+  constexpr double kChi2ThreeMedian = 2.365974;
+  // A block this little redundant is fixed by its own measurement: its residual says nothing.
+  constexpr double kMinimumRedundancy = 0.05;
+  const std::vector<EdgeRedundancy> redundancy = edge_redundancies(poses, edges, options);
+  std::vector<std::vector<double>> rotation(group_count), translation(group_count);
+  std::vector<std::size_t> members(group_count, 0);
+  std::map<std::size_t, std::pair<std::vector<double>, std::vector<double>>> pooled;
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const PoseGraphEdge& edge = edges[k];
+    if (edge.switchable) continue;
+    ++members[group[k]];
+    const Eigen::Matrix<double, 6, 1> error = pose_graph_error(poses[edge.from], poses[edge.to], edge.measurement);
+    auto& [pool_rotation, pool_translation] = pooled[pool[group[k]]];
+    // Each block's χ² over its share of the 3 degrees of freedom the graph left it (E[χ²] = σ² r).
+    if (redundancy[k].rotation > kMinimumRedundancy) {
+      const double normalised = 3.0 / redundancy[k].rotation * error.head<3>().dot(edge.information.topLeftCorner<3, 3>() * error.head<3>());
+      rotation[group[k]].push_back(normalised);
+      pool_rotation.push_back(normalised);
+    }
+    if (redundancy[k].translation > kMinimumRedundancy) {
+      const double normalised = 3.0 / redundancy[k].translation * error.tail<3>().dot(edge.information.bottomRightCorner<3, 3>() * error.tail<3>());
+      translation[group[k]].push_back(normalised);
+      pool_translation.push_back(normalised);
+    }
+  }
+  std::vector<VarianceFactors> factors(group_count);
+  for (std::size_t g = 0; g < group_count; ++g) {
+    VarianceFactors& factor = factors[g];
+    factor.edges = members[g];
+    if (factor.edges == 0) continue;
+    factor.pooled = factor.edges < minimum_edges;
+    const auto& [pool_rotation, pool_translation] = pooled[pool[g]];
+    const std::vector<double>& rotation_values = factor.pooled ? pool_rotation : rotation[g];
+    const std::vector<double>& translation_values = factor.pooled ? pool_translation : translation[g];
+    // A median this small is rounding, not a measured variance (every residual zero).
+    constexpr double kUnmeasured = 1e-12;
+    const double median_rotation = median_of(rotation_values), median_translation = median_of(translation_values);
+    factor.measured = median_rotation > kUnmeasured && median_translation > kUnmeasured;
+    if (median_rotation > kUnmeasured) factor.rotation = median_rotation / kChi2ThreeMedian;
+    if (median_translation > kUnmeasured) factor.translation = median_translation / kChi2ThreeMedian;
+  }
+  return factors;
+}
+
+Information6d scaled_information(const Information6d& information, double rotation_factor, double translation_factor) {
+  Eigen::Matrix<double, 6, 1> scale;
+  scale.head<3>().setConstant(1.0 / std::sqrt(rotation_factor));
+  scale.tail<3>().setConstant(1.0 / std::sqrt(translation_factor));
+  return scale.asDiagonal() * information * scale.asDiagonal();
 }
 
 }  // namespace quadrix

@@ -76,4 +76,55 @@ std::vector<std::size_t> pose_graph_components(std::size_t pose_count, const std
 PoseGraphSummary optimise_pose_graph(std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
                                      const PoseGraphOptions& options = {});
 
+/// What one group of edges was found to deserve by estimate_variance_factors: the factors by which
+/// its rotation and translation variances are to be multiplied (> 1: they were given too small, the
+/// edges are worse than stated; < 1: too large).
+struct VarianceFactors {
+  std::size_t edges = 0;     ///< edges of the group that took part (switchable ones do not)
+  double rotation = 1.0;     ///< median of the group's rotation χ² over their redundancy, over the median of χ²(3)
+  double translation = 1.0;  ///< the same for the translation block
+  bool pooled = false;       ///< the group had fewer than the minimum edges and took its kind's pooled factors
+  bool measured = true;      ///< false when a block had no edge the rest of the graph checks (e.g. the odometry of a session joined to nothing): that block's factor left at 1
+};
+
+/// Redundancy of one edge's rotation and translation blocks (each out of 3): the share of the block's
+/// degrees of freedom the rest of the graph checks. 0: the edge alone fixes it (its residual is zero
+/// whatever its error); 3: the rest of the graph fixes it (its residual is its whole error).
+struct EdgeRedundancy {
+  double rotation = 3.0;     ///< r = 3 - tr(W_rot (J C Jᵀ)_rot)
+  double translation = 3.0;  ///< the same for the translation block
+};
+
+/// Each edge's redundancy at `poses` (a solved graph): r_b = 3 - tr(W_b (J C Jᵀ)_b) for the rotation
+/// and translation blocks b (Förstner 1979), with W = ρ'(χ²) Ω the edge's information weighted by its
+/// kernel (Huber for robust edges, DCS for switchable ones, options' thresholds), J the Jacobian of its
+/// error over both poses' tangent steps, and C the poses' covariance, the inverse of the graph's
+/// normal matrix Σ Jᵀ W J with the first pose of each connected component fixed (the gauge).
+/// Throws quadrix::Error for an edge naming no pose, or a singular normal matrix.
+std::vector<EdgeRedundancy> edge_redundancies(const std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
+                                              const PoseGraphOptions& options = {});
+
+/// Robust variance component estimation (Förstner 1979, with medians instead of sums so that a few
+/// wrong edges under Huber do not set a group's scale): at `poses` (a solved graph), each group g of
+/// edges gets σ²_g,rot = median_{e ∈ g}(3 χ²_e,rot / r_e,rot) / median(χ²(3)), χ²_e,rot = e_rotᵀ Ω_rot e_rot
+/// with Ω_rot the diagonal 3x3 block of the edge's information and r_e,rot its redundancy
+/// (edge_redundancies: E[χ²] = σ² r, so a group the graph trusts most, whose residuals are smallest,
+/// is not taken for the most accurate); likewise for the translation block. Blocks with a redundancy
+/// under 0.05 take no part (their own measurement fixes them). `group[k]` is edge k's group (<
+/// group_count); `pool[g]` names the pool a group falls back to when it has fewer than
+/// `minimum_edges` edges (e.g. all odometry or all loop edges: the pooled factors are the medians over
+/// the pool's edges). Switchable edges take no part. A block with nothing to measure keeps its
+/// factor at 1. Throws quadrix::Error when `group` and `edges` differ in size or a group or pool
+/// index is out of range.
+std::vector<VarianceFactors> estimate_variance_factors(const std::vector<Eigen::Isometry3d>& poses,
+                                                       const std::vector<PoseGraphEdge>& edges,
+                                                       const std::vector<std::size_t>& group, std::size_t group_count,
+                                                       const std::vector<std::size_t>& pool, std::size_t minimum_edges,
+                                                       const PoseGraphOptions& options = {});
+
+/// Scales an information matrix Ω into S Ω S with S = diag(1/√rotation_factor I₃, 1/√translation_factor
+/// I₃): the rotation block's variances grow by rotation_factor, the translation block's by
+/// translation_factor, and the matrix stays symmetric positive semi-definite (cross terms scaled by both).
+Information6d scaled_information(const Information6d& information, double rotation_factor, double translation_factor);
+
 }  // namespace quadrix

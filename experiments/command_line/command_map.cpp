@@ -72,7 +72,8 @@ int run_on_scheduler(const MapCommandOptions& options) {
                                      number(options.map.odometry_gate_sigmas), "--joint-rounds", std::to_string(options.map.joint_rounds),
                                      "--joint-radius", number(options.map.joint_radius), "--ambiguous-gate-translation",
                                      number(options.map.ambiguous_gate_translation), "--ambiguous-gate-rotation",
-                                     number(options.map.ambiguous_gate_rotation_degrees)});
+                                     number(options.map.ambiguous_gate_rotation_degrees), "--information-rounds",
+                                     std::to_string(options.map.information_rounds)});
   if (!options.map.use_ambiguous_joint_edges) arguments.push_back("--no-ambiguous-joint-edges");
   if (!options.map.use_ambiguous_edges) arguments.push_back("--no-ambiguous-edges");
   if (options.map.use_ambiguous_edges_across_sessions) arguments.push_back("--ambiguous-edges-across-sessions");
@@ -157,6 +158,15 @@ void run(const MapCommandOptions& options) {
               list.scans.size(), list.sessions.size(), loops, within, ok, used);
   std::printf("graph: cost %.4g -> %.4g in %d iterations (%s)\n", result.graph.initial_cost, result.graph.final_cost,
               result.graph.iterations, result.graph.converged ? "converged" : "not converged");
+  if (!result.information_groups.empty()) {
+    std::printf("information (variance factors after %zu rounds%s, rotation / translation):", result.calibration_costs.size(),
+                result.calibration_converged ? "" : ", not settled");
+    for (const InformationGroup& group : result.information_groups)
+      if (group.edges > 0)
+        std::printf(" %s %.3g / %.3g%s;", group.name.c_str(), group.rotation_factor, group.translation_factor,
+                    !group.measured ? " (unmeasured)" : group.pooled ? " (pooled)" : "");
+    std::printf("\n");
+  }
   if (alone > 0) std::printf("warning: %zu scans belong to sessions joined to no other: left in their own frames (frame = own)\n", alone);
   std::printf("time: %.1f s, %.0f ms a scan (modelling %.0f ms, registration %.0f ms, graph %.0f ms in all)\n",
               result.timings_ms.at("total") / 1000.0, result.timings_ms.at("total") / list.scans.size(),
@@ -225,6 +235,11 @@ const CommandRegistration registration(75, [](CLI::App& app) {
   command->add_option("--ambiguous-gate-rotation", options->map.ambiguous_gate_rotation_degrees,
                       "and within this many degrees")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command->add_option("--information-rounds", options->map.information_rounds,
+                      "At most this many rounds of variance component estimation after the last solve: each group of edges (odometry per "
+                      "session, loop edges per pair of sessions) is weighted by what its residuals measured (0: the information as given)")
+      ->check(CLI::Range(std::size_t{0}, kMaximumInformationRounds))
       ->capture_default_str();
   command->add_option("--map-voxel", options->map.map_voxel, "map.ply keeps one point per cube of this edge, m");
   command->callback([options] { run(*options); });

@@ -43,6 +43,8 @@ def _parser():
     command.add_argument("--ambiguous-gate-translation", type=float, help="An ambiguous loop edge enters the graph only within "
                          "this many metres of the map solved without ambiguous edges")
     command.add_argument("--ambiguous-gate-rotation", type=float, help="and within this many degrees")
+    command.add_argument("--information-rounds", type=int, help="At most this many rounds of variance component estimation "
+                         "after the last solve: each group of edges is weighted by what its residuals measured (0: the information as given)")
     command.add_argument("--map-voxel", type=float, help="map.ply keeps one point per cube of this edge, m")
     return parser
 
@@ -56,7 +58,8 @@ def _options(arguments):
              "information_scale": "loop_information_scale", "odometry_gate": "odometry_gate_sigmas",
              "joint_rounds": "joint_rounds", "joint_radius": "joint_radius",
              "ambiguous_gate_translation": "ambiguous_gate_translation",
-             "ambiguous_gate_rotation": "ambiguous_gate_rotation_degrees"}
+             "ambiguous_gate_rotation": "ambiguous_gate_rotation_degrees",
+             "information_rounds": "information_rounds"}
     options = {"preset": arguments.preset}
     for argument, option in names.items():
         value = getattr(arguments, argument)

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -512,6 +513,17 @@ TEST(MappingJointFrame, RadiusSearchAfterPlacementJoinsSessionsAlongTheirPath) {
   EXPECT_EQ(after.joint_place_queries, 8u);
   EXPECT_EQ(after.joint_place_hits, after.joint_place_queries);
   EXPECT_EQ(before.joint_place_hits, before.place_hits);
+  // The information calibration: a group per session's odometry and per pair of sessions' loop
+  // edges, each with finite positive factors, and at least one round solved.
+  std::set<std::string> names;
+  for (const InformationGroup& group : joint.information_groups) {
+    names.insert(group.name);
+    EXPECT_TRUE(std::isfinite(group.rotation_factor) && group.rotation_factor > 0.0) << group.name;
+    EXPECT_TRUE(std::isfinite(group.translation_factor) && group.translation_factor > 0.0) << group.name;
+  }
+  EXPECT_EQ(names, (std::set<std::string>{"odometry a", "odometry b", "loop a-b"}));
+  EXPECT_FALSE(joint.calibration_costs.empty());
+  EXPECT_LE(joint.calibration_costs.size(), MapOptions{}.information_rounds);
 }
 
 TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
