@@ -193,6 +193,8 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
        << ", \"joint_rounds\": " << options.joint_rounds << ", \"joint_radius\": " << json_number(options.joint_radius)
        << ", \"joint_gate_translation\": " << json_number(options.joint_gate_translation)
        << ", \"joint_gate_rotation_degrees\": " << json_number(options.joint_gate_rotation_degrees)
+       << ", \"place_consensus_rotation_degrees\": " << json_number(options.place_consensus_rotation_degrees)
+       << ", \"place_consensus_translation\": " << json_number(options.place_consensus_translation)
        << ", \"use_ambiguous_joint_edges\": " << (options.use_ambiguous_joint_edges ? "true" : "false")
        << ", \"ambiguous_gate_translation\": " << json_number(options.ambiguous_gate_translation)
        << ", \"ambiguous_gate_rotation_degrees\": " << json_number(options.ambiguous_gate_rotation_degrees)

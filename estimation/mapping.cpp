@@ -721,6 +721,50 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       edge.note = "not in the graph: " + why;
     }
   }
+  // Edges between two sessions must agree with each other: each one's relative pose of the two
+  // sessions' odometry frames predicts the others (drift between them allowed by the consensus gate);
+  // the edges the best-supported one predicts stay, the others leave the graph. When two or more
+  // edges join a pair of sessions and none predicts another, none stays: contradicting edges do not
+  // glue sessions (a single edge cannot be checked and stays).
+  std::map<std::pair<std::size_t, std::size_t>, std::vector<std::size_t>> across_pairs;  // (smaller, larger) session -> edges
+  for (std::size_t index = 0; index < loop_edges.size(); ++index) {
+    const MapEdge& edge = loop_edges[index];
+    if (edge.used && edge.across_sessions) across_pairs[std::minmax(session_of[edge.from], session_of[edge.to])].push_back(index);
+  }
+  for (const auto& [session_pair, members] : across_pairs) {
+    if (members.size() < 2) continue;
+    // Frame of the `from` scan's session in the `to` scan's session's odometry frame, as edge k measures it.
+    const auto frame_of = [&](const MapEdge& edge) {
+      return result.odometry[edge.to] * edge.transform * result.odometry[edge.from].inverse();
+    };
+    const auto predicts = [&](const MapEdge& by, const MapEdge& other, PoseDeparture& departure) {
+      Eigen::Isometry3d frame = frame_of(by);  // `by`'s from-session into its to-session
+      if (session_of[by.from] != session_of[other.from]) frame = frame.inverse();
+      departure = departure_between(other.transform, result.odometry[other.to].inverse() * frame * result.odometry[other.from]);
+      return departure.degrees <= options.place_consensus_rotation_degrees && departure.metres <= options.place_consensus_translation;
+    };
+    std::size_t best = members.front(), best_support = 0;
+    for (const std::size_t candidate : members) {
+      std::size_t support = 0;
+      PoseDeparture departure;
+      for (const std::size_t other : members) support += other != candidate && predicts(loop_edges[candidate], loop_edges[other], departure);
+      if (support > best_support) best = candidate, best_support = support;
+    }
+    for (const std::size_t other : members) {
+      PoseDeparture departure;
+      if (other == best && best_support > 0) continue;
+      if (best_support > 0 && predicts(loop_edges[best], loop_edges[other], departure)) continue;
+      MapEdge& edge = loop_edges[other];
+      edge.used = false;
+      char why[200];
+      if (best_support > 0)
+        std::snprintf(why, sizeof why, "not in the graph: departs by %.1f deg and %.1f m from what %zu of the %zu edges between these sessions agree on",
+                      departure.degrees, departure.metres, best_support + 1, members.size());
+      else
+        std::snprintf(why, sizeof why, "not in the graph: none of the %zu edges between these sessions agrees with another", members.size());
+      edge.note = why + (edge.note.empty() ? std::string() : "; " + edge.note);
+    }
+  }
   result.edges = odometry_edges;
   result.edges.insert(result.edges.end(), loop_edges.begin(), loop_edges.end());
 

@@ -58,6 +58,8 @@ MapOptions map_options_from(const py::dict& keywords) {
       else if (key == "joint_radius") options.joint_radius = value.cast<double>();
       else if (key == "joint_gate_translation") options.joint_gate_translation = value.cast<double>();
       else if (key == "joint_gate_rotation_degrees") options.joint_gate_rotation_degrees = value.cast<double>();
+      else if (key == "place_consensus_rotation_degrees") options.place_consensus_rotation_degrees = value.cast<double>();
+      else if (key == "place_consensus_translation") options.place_consensus_translation = value.cast<double>();
       else if (key == "use_ambiguous_joint_edges") options.use_ambiguous_joint_edges = value.cast<bool>();
       else if (key == "ambiguous_gate_translation") options.ambiguous_gate_translation = value.cast<double>();
       else if (key == "ambiguous_gate_rotation_degrees") options.ambiguous_gate_rotation_degrees = value.cast<double>();
@@ -468,7 +470,7 @@ progress: called as progress(stage, done, total) as scans are modelled and pairs
 Keyword options: the members of MapOptions (preset, loop_radius, loop_radius_growth,
 maximum_loop_radius, minimum_loop_travel, candidates_per_scan, minimum_candidate_spacing,
 place_candidates_per_scan, place_query_stride, joint_rounds, joint_radius, joint_gate_translation,
-joint_gate_rotation_degrees, use_ambiguous_joint_edges, ambiguous_gate_translation,
+joint_gate_rotation_degrees, place_consensus_rotation_degrees, place_consensus_translation, use_ambiguous_joint_edges, ambiguous_gate_translation,
 ambiguous_gate_rotation_degrees, register_consecutive, use_ambiguous_edges,
 use_ambiguous_edges_across_sessions, odometry_gate_sigmas, loop_information_from_registration,
 loop_information_scale,

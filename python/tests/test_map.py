@@ -59,7 +59,16 @@ def test_map_in_process_writes_the_folder_and_evaluates(walk, tmp_path):
     assert evaluation is not None and evaluation["ate_m"] < 0.3, evaluation
     for name in ("poses.tsv", "edges.csv", "report.json", "map.ply", "map_model.qsm", "map.html"):
         assert (tmp_path / "map" / name).exists(), name
-    assert "evaluation" in json.loads((tmp_path / "map" / "report.json").read_text())
+    report = json.loads((tmp_path / "map" / "report.json").read_text())
+    assert "evaluation" in report
+    # The information calibration: one group per session's odometry, as report.json has them.
+    written = report["information_groups"]
+    assert [group["name"] for group in written] == [group["name"] for group in result.information_groups]
+    for stored, returned in zip(written, result.information_groups):
+        assert stored["rotation_factor"] == pytest.approx(returned["rotation_factor"], rel=1e-8)
+        assert stored["translation_factor"] == pytest.approx(returned["translation_factor"], rel=1e-8)
+    assert {"odometry a", "odometry b"} <= {group["name"] for group in result.information_groups}
+    assert all(group["rotation_factor"] > 0 and group["translation_factor"] > 0 for group in result.information_groups)
     assert result.out == str(tmp_path / "map")
 
 
