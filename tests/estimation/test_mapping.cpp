@@ -526,6 +526,78 @@ TEST(MappingJointFrame, RadiusSearchAfterPlacementJoinsSessionsAlongTheirPath) {
   EXPECT_LE(joint.calibration_costs.size(), MapOptions{}.information_rounds);
 }
 
+// Edges between two sessions must agree: the first place-descriptor pair between the interleaved
+// sessions is answered `ok` but turned by 180 deg and shifted 100 m (what a look-alike street gives
+// across sensors). The relative pose of the sessions the right edges agree on does not predict it,
+// so it leaves the graph and b is placed by the right ones; with the consensus gate opened it is
+// used, and the map is wrong.
+TEST(MappingPlaceConsensus, AWrongOkEdgeBetweenSessionsThatTheOthersContradictLeavesTheGraph) {
+  QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
+  TemporaryFolder folder;
+  const DriftedWalk walk = interleaved_sessions(folder.path, 0.7, 5);
+  MapOptions options;
+  options.minimum_loop_travel = 1000.0;  // no loops within a session: only what joins the sessions
+  options.place_candidates_per_scan = 1;
+  options.place_query_stride = 2;
+  options.joint_rounds = 0;
+  std::vector<std::string> stored(walk.list.scans.size());
+  bool corrupted = false;
+  std::pair<std::size_t, std::size_t> corrupted_pair;
+  MapExecutor executor;
+  executor.model = [&](const std::vector<std::size_t>& scans) {
+    std::vector<MappedScan> models;
+    for (std::size_t scan : scans) {
+      stored[scan] = mapped_scan_to_bytes(model_map_scan(walk.list, scan, options));
+      models.push_back(mapped_scan_from_bytes(stored[scan]));
+    }
+    return models;
+  };
+  executor.register_pairs = [&](const std::vector<MapPairRequest>& pairs) {
+    std::vector<MapEdge> edges;
+    for (const MapPairRequest& pair : pairs) {
+      edges.push_back(register_map_pair(walk.list, pair, mapped_scan_from_bytes(stored[pair.from]),
+                                        mapped_scan_from_bytes(stored[pair.to]), options));
+      if (!corrupted && walk.list.scans[pair.from].session != walk.list.scans[pair.to].session) {
+        Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+        turn.linear() = Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        turn.translation() = Eigen::Vector3d(100.0, 0.0, 0.0);
+        edges.back().transform = turn * edges.back().transform;
+        edges.back().status = "ok";
+        corrupted = true;
+        corrupted_pair = {pair.from, pair.to};
+      }
+    }
+    return edges;
+  };
+  const MapResult checked = map_scans(walk.list, options, {}, executor);
+  ASSERT_TRUE(corrupted);
+  const auto wrong_edge = [&](const MapResult& result) -> const MapEdge& {
+    for (const MapEdge& edge : result.edges)
+      if (edge.kind == MapEdgeKind::Loop && edge.from == corrupted_pair.first && edge.to == corrupted_pair.second) return edge;
+    throw Error("the corrupted edge is missing");
+  };
+  const MapEvaluation evaluation = evaluate_map(checked, walk.truth);
+  std::size_t right_used_across = 0;
+  for (const MapEdge& edge : checked.edges)
+    if (edge.used && edge.across_sessions)
+      right_used_across += registration_succeeded(edge.transform, walk.truth[edge.to].pose.inverse() * walk.truth[edge.from].pose);
+  std::printf("place consensus: corrupted edge used %d (%s); %zu right edges across used; ATE %.3f m; wrong used %zu\n",
+              wrong_edge(checked).used, wrong_edge(checked).note.c_str(), right_used_across, evaluation.ate, evaluation.wrong_used_loop_edges);
+  EXPECT_FALSE(wrong_edge(checked).used);
+  EXPECT_NE(wrong_edge(checked).note.find("departs by"), std::string::npos) << wrong_edge(checked).note;
+  EXPECT_GE(right_used_across, 2u);
+  EXPECT_TRUE(checked.in_map_frame.back()) << "the right edges should place b";
+  EXPECT_EQ(evaluation.wrong_used_loop_edges, 0u);
+  EXPECT_LE(evaluation.ate, 0.4);
+  // The gate opened: the wrong edge is used.
+  options.place_consensus_rotation_degrees = 360.0;
+  options.place_consensus_translation = 1e9;
+  corrupted = false;
+  const MapResult unchecked = map_scans(walk.list, options, {}, executor);
+  EXPECT_TRUE(wrong_edge(unchecked).used);
+  EXPECT_EQ(evaluate_map(unchecked, walk.truth).wrong_used_loop_edges, 1u);
+}
+
 TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
   MappedScan scan;
   scan.model.records.resize(2);
