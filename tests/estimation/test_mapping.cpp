@@ -473,6 +473,17 @@ DriftedWalk interleaved_sessions(const fs::path& folder, double yaw_bias_degrees
   return result;
 }
 
+/// Options for the interleaved sessions that register only what joins them: no loops within a
+/// session, one place candidate for every `stride`-th scan, no joint-frame rounds.
+MapOptions edges_across_only(std::size_t stride) {
+  MapOptions options;
+  options.minimum_loop_travel = 1000.0;
+  options.place_candidates_per_scan = 1;
+  options.place_query_stride = stride;
+  options.joint_rounds = 0;
+  return options;
+}
+
 // Two sessions that the place descriptor joins by few edges (every fourth scan of b queries it):
 // the radius search in the joint map frame, once b is placed, registers each of b's scans with its
 // neighbour in a, so b is held along its whole path instead of at its anchors.
@@ -480,11 +491,7 @@ TEST(MappingJointFrame, RadiusSearchAfterPlacementJoinsSessionsAlongTheirPath) {
   QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
   TemporaryFolder folder;
   const DriftedWalk walk = interleaved_sessions(folder.path, 0.7, 5);
-  MapOptions options;
-  options.minimum_loop_travel = 1000.0;  // no loops within a session: only what joins the sessions
-  options.place_candidates_per_scan = 1;
-  options.place_query_stride = 4;
-  options.joint_rounds = 0;
+  MapOptions options = edges_across_only(4);
   const MapResult placed_only = map_scans(walk.list, options);
   options.joint_rounds = 3;
   const MapResult joint = map_scans(walk.list, options);
@@ -535,11 +542,7 @@ TEST(MappingPlaceConsensus, AWrongOkEdgeBetweenSessionsThatTheOthersContradictLe
   QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
   TemporaryFolder folder;
   const DriftedWalk walk = interleaved_sessions(folder.path, 0.7, 5);
-  MapOptions options;
-  options.minimum_loop_travel = 1000.0;  // no loops within a session: only what joins the sessions
-  options.place_candidates_per_scan = 1;
-  options.place_query_stride = 2;
-  options.joint_rounds = 0;
+  MapOptions options = edges_across_only(2);
   std::vector<std::string> stored(walk.list.scans.size());
   bool corrupted = false;
   std::pair<std::size_t, std::size_t> corrupted_pair;
