@@ -167,7 +167,8 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
   json << "],\n  \"calibration_costs\": [";
   for (std::size_t round = 0; round < result.calibration_costs.size(); ++round)
     json << (round == 0 ? "" : ", ") << json_number(result.calibration_costs[round]);
-  json << "],\n  \"calibration_converged\": " << (result.calibration_converged ? "true" : "false");
+  json << "],\n  \"calibration_converged\": " << (result.calibration_converged ? "true" : "false")
+       << ",\n  \"calibration_note\": " << json_string(result.calibration_note);
   json << ",\n  \"edges\": {";
   first = true;
   for (const auto& [name, value] : counts) json << (first ? "" : ", ") << json_string(name) << ": " << value, first = false;

@@ -961,9 +961,16 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       std::vector<std::size_t> graph_edge_of, graph_groups;
       used_graph(graph_edges, graph_edge_of);
       for (const std::size_t index : graph_edge_of) graph_groups.push_back(group_of_edge[index]);
-      const std::vector<VarianceFactors> factors = estimate_variance_factors(
-          result.poses, graph_edges, graph_groups, result.information_groups.size(), pool, options.information_minimum_edges,
-          options.graph);
+      std::vector<VarianceFactors> factors;
+      try {
+        factors = estimate_variance_factors(result.poses, graph_edges, graph_groups, result.information_groups.size(), pool,
+                                            options.information_minimum_edges, options.graph);
+      } catch (const Error& error) {
+        // A graph whose covariance cannot be formed (a pose only edges without information reach)
+        // keeps the weights of the last round: the map stands, only uncalibrated.
+        result.calibration_note = std::string("calibration stopped: ") + error.what();
+        break;
+      }
       for (std::size_t g = 0; g < factors.size(); ++g) {
         InformationGroup& group = result.information_groups[g];
         group.edges = factors[g].edges;

@@ -175,6 +175,7 @@ struct MapResult {
   std::vector<InformationGroup> information_groups;  ///< the information calibration per group of used edges (empty with information_rounds 0)
   std::vector<double> calibration_costs;       ///< the graph's final cost after each calibration round
   bool calibration_converged = false;          ///< the last round's factors all lay within information_tolerance
+  std::string calibration_note;                ///< why the calibration stopped early (a singular graph), else empty
 };
 
 /// Progress callback: stage name, done, total.

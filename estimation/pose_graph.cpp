@@ -319,6 +319,10 @@ std::vector<EdgeRedundancy> edge_redundancies(const std::vector<Eigen::Isometry3
     const Information6d fitted = jacobians[k] * covariance * jacobians[k].transpose();
     redundancy[k].rotation = 3.0 - (weights[k].topLeftCorner<3, 3>() * fitted.topLeftCorner<3, 3>()).trace();
     redundancy[k].translation = 3.0 - (weights[k].bottomRightCorner<3, 3>() * fitted.bottomRightCorner<3, 3>()).trace();
+    // A zero pivot (a pose no edge's information reaches) leaves the factorisation "successful" and
+    // the covariance infinite.
+    if (!std::isfinite(redundancy[k].rotation) || !std::isfinite(redundancy[k].translation))
+      throw Error("edge_redundancies: the normal matrix of the graph is singular (edge " + std::to_string(k) + ")");
   }
   return redundancy;
 }

@@ -100,7 +100,8 @@ struct EdgeRedundancy {
 /// kernel (Huber for robust edges, DCS for switchable ones, options' thresholds), J the Jacobian of its
 /// error over both poses' tangent steps, and C the poses' covariance, the inverse of the graph's
 /// normal matrix Σ Jᵀ W J with the first pose of each connected component fixed (the gauge).
-/// Throws quadrix::Error for an edge naming no pose, or a singular normal matrix.
+/// Throws quadrix::Error for an edge naming no pose, or a singular normal matrix (a pose no edge's
+/// information reaches).
 std::vector<EdgeRedundancy> edge_redundancies(const std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
                                               const PoseGraphOptions& options = {});
 

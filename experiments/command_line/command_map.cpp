@@ -167,6 +167,7 @@ void run(const MapCommandOptions& options) {
                     !group.measured ? " (unmeasured)" : group.pooled ? " (pooled)" : "");
     std::printf("\n");
   }
+  if (!result.calibration_note.empty()) std::printf("warning: %s\n", result.calibration_note.c_str());
   if (alone > 0) std::printf("warning: %zu scans belong to sessions joined to no other: left in their own frames (frame = own)\n", alone);
   std::printf("time: %.1f s, %.0f ms a scan (modelling %.0f ms, registration %.0f ms, graph %.0f ms in all)\n",
               result.timings_ms.at("total") / 1000.0, result.timings_ms.at("total") / list.scans.size(),

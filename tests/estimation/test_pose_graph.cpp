@@ -234,6 +234,11 @@ TEST(PoseGraph, VarianceFactorsPoolSmallGroupsAndLeaveUncontradictedOnesAlone) {
   EXPECT_NEAR(factors[1].translation, 1.5 * 0.2 * 0.2 / (0.1 * 0.1) / 2.365974, 1e-4);
   EXPECT_EQ(factors[1].rotation, 1.0);  // every rotation agrees: nothing measured
   EXPECT_FALSE(factors[1].measured);
+  // A pose that only an edge without information reaches: no covariance, an error (not a crash).
+  const std::vector<PoseGraphEdge> blind = {{1, 0, pose_at(1, 0, 0), information(0.01, 0.1), false},
+                                            {2, 1, pose_at(1, 0, 0), Information6d::Zero(), false}};
+  EXPECT_THROW(edge_redundancies(poses, blind), Error);
+  EXPECT_THROW(estimate_variance_factors(poses, blind, {0, 0}, 1, {0}, 1), Error);
   EXPECT_THROW(estimate_variance_factors(poses, edges, {0, 0}, 2, {0, 0}, 2), Error);     // one group per edge
   EXPECT_THROW(estimate_variance_factors(poses, edges, {0, 0, 5}, 2, {0, 0}, 2), Error);  // no such group
   // Scaling keeps the matrix symmetric and scales each block's variances as stated.
