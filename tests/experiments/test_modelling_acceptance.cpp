@@ -143,6 +143,8 @@ const ClassScore& score_of(const ClassScores& scores, ElementClass element_class
     if (score.element_class == element_class) return score;
   throw Error("no score for class " + element_class_name(element_class));
 }
+/// The returned reference would outlive a temporary's scores: refused at compile time.
+const ClassScore& score_of(ClassScores&& scores, ElementClass element_class) = delete;
 
 TEST(ClassScores, CountEveryScoredPointOnceAndSkipUnmappedLabelsAndPointsOutOfRange) {
   // Points 0-7 lie 5 m from the sensor, point 8 at 100 m (beyond the 80 m range). Labels: road x3,
@@ -215,8 +217,8 @@ TEST(ClassScores, LabelsModeAgreesWithItsOwnLabelsAndGeometryFindsTheGround) {
   // Geometry only: the simulated street's ground is flat and bare, so nearly all of it is the ground element.
   const ExtractionOptions options = extraction_preset("vlp64");
   const ModellingResult geometric = model_scene(scan.cloud, options, ModellingOptions());
-  const ClassScore& ground = score_of(score_element_classes(scan.cloud, geometric.extraction, scan.cloud.labels, options),
-                                      ElementClass::Ground);
+  const ClassScores scores = score_element_classes(scan.cloud, geometric.extraction, scan.cloud.labels, options);
+  const ClassScore& ground = score_of(scores, ElementClass::Ground);
   std::cout << "street seed 3 geometry only, ground: recall " << ground.recall << ", precision " << ground.precision << "\n";
   EXPECT_GE(ground.recall, 0.9);
   EXPECT_GE(ground.precision, 0.9);
