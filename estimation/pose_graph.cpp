@@ -327,6 +327,20 @@ std::vector<EdgeRedundancy> edge_redundancies(const std::vector<Eigen::Isometry3
   return redundancy;
 }
 
+namespace {
+
+// A block this little redundant is fixed by its own measurement: its residual says nothing.
+constexpr double kMinimumRedundancy = 0.05;
+
+// χ² of an edge's rotation and translation blocks at `poses`, each under its diagonal block of the information.
+std::pair<double, double> block_chi2(const std::vector<Eigen::Isometry3d>& poses, const PoseGraphEdge& edge) {
+  const Eigen::Matrix<double, 6, 1> error = pose_graph_error(poses[edge.from], poses[edge.to], edge.measurement);
+  return {error.head<3>().dot(edge.information.topLeftCorner<3, 3>() * error.head<3>()),
+          error.tail<3>().dot(edge.information.bottomRightCorner<3, 3>() * error.tail<3>())};
+}
+
+}  // namespace
+
 std::vector<VarianceFactors> estimate_variance_factors(const std::vector<Eigen::Isometry3d>& poses,
                                                        const std::vector<PoseGraphEdge>& edges,
                                                        const std::vector<std::size_t>& group, std::size_t group_count,
@@ -340,8 +354,6 @@ std::vector<VarianceFactors> estimate_variance_factors(const std::vector<Eigen::
     if (group[k] >= group_count) throw Error("estimate_variance_factors: edge " + std::to_string(k) + " names no group");
   // Median of χ² with 3 degrees of freedom: the robust estimate's reference.
   constexpr double kChi2ThreeMedian = 2.365974;
-  // A block this little redundant is fixed by its own measurement: its residual says nothing.
-  constexpr double kMinimumRedundancy = 0.05;
   const std::vector<EdgeRedundancy> redundancy = edge_redundancies(poses, edges, options);
   std::vector<std::vector<double>> rotation(group_count), translation(group_count);
   std::vector<std::size_t> members(group_count, 0);
@@ -350,16 +362,16 @@ std::vector<VarianceFactors> estimate_variance_factors(const std::vector<Eigen::
     const PoseGraphEdge& edge = edges[k];
     if (edge.switchable) continue;
     ++members[group[k]];
-    const Eigen::Matrix<double, 6, 1> error = pose_graph_error(poses[edge.from], poses[edge.to], edge.measurement);
+    const auto [rotation_chi2, translation_chi2] = block_chi2(poses, edge);
     auto& [pool_rotation, pool_translation] = pooled[pool[group[k]]];
     // Each block's χ² over its share of the 3 degrees of freedom the graph left it (E[χ²] = σ² r).
     if (redundancy[k].rotation > kMinimumRedundancy) {
-      const double normalised = 3.0 / redundancy[k].rotation * error.head<3>().dot(edge.information.topLeftCorner<3, 3>() * error.head<3>());
+      const double normalised = 3.0 / redundancy[k].rotation * rotation_chi2;
       rotation[group[k]].push_back(normalised);
       pool_rotation.push_back(normalised);
     }
     if (redundancy[k].translation > kMinimumRedundancy) {
-      const double normalised = 3.0 / redundancy[k].translation * error.tail<3>().dot(edge.information.bottomRightCorner<3, 3>() * error.tail<3>());
+      const double normalised = 3.0 / redundancy[k].translation * translation_chi2;
       translation[group[k]].push_back(normalised);
       pool_translation.push_back(normalised);
     }
@@ -381,6 +393,48 @@ std::vector<VarianceFactors> estimate_variance_factors(const std::vector<Eigen::
     if (median_translation > kUnmeasured) factor.translation = median_translation / kChi2ThreeMedian;
   }
   return factors;
+}
+
+std::vector<EdgeOutlierStatistic> edge_outlier_statistics(const std::vector<Eigen::Isometry3d>& poses,
+                                                          const std::vector<PoseGraphEdge>& edges, const PoseGraphOptions& options) {
+  const std::vector<EdgeRedundancy> redundancy = edge_redundancies(poses, edges, options);
+  std::vector<EdgeOutlierStatistic> statistics(edges.size());
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const auto [rotation_chi2, translation_chi2] = block_chi2(poses, edges[k]);
+    if (redundancy[k].rotation > kMinimumRedundancy) statistics[k].rotation = rotation_chi2 / redundancy[k].rotation;
+    if (redundancy[k].translation > kMinimumRedundancy) statistics[k].translation = translation_chi2 / redundancy[k].translation;
+  }
+  return statistics;
+}
+
+DataSnooping snoop_pose_graph(std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
+                              const std::vector<bool>& testable, double threshold, std::size_t maximum_removals,
+                              const PoseGraphOptions& options) {
+  if (testable.size() != edges.size())
+    throw Error("snoop_pose_graph: " + std::to_string(testable.size()) + " testable flags for " + std::to_string(edges.size()) + " edges");
+  DataSnooping snooping;
+  std::vector<bool> kept(edges.size(), true);
+  while (true) {
+    std::vector<PoseGraphEdge> remaining;
+    std::vector<std::size_t> index_of;
+    for (std::size_t k = 0; k < edges.size(); ++k)
+      if (kept[k]) remaining.push_back(edges[k]), index_of.push_back(k);
+    optimise_pose_graph(poses, remaining, options);
+    const std::vector<EdgeOutlierStatistic> statistics = edge_outlier_statistics(poses, remaining, options);
+    double worst = 0.0;
+    std::size_t worst_edge = 0;
+    for (std::size_t k = 0; k < remaining.size(); ++k)
+      if (testable[index_of[k]] && statistics[k].largest() > worst) worst = statistics[k].largest(), worst_edge = index_of[k];
+    if (!(worst > threshold)) break;
+    if (snooping.removed.size() >= maximum_removals) {
+      snooping.exhausted = true;
+      break;
+    }
+    kept[worst_edge] = false;
+    snooping.removed.push_back(worst_edge);
+    snooping.statistic.push_back(worst);
+  }
+  return snooping;
 }
 
 Information6d scaled_information(const Information6d& information, double rotation_factor, double translation_factor) {

@@ -123,6 +123,41 @@ std::vector<VarianceFactors> estimate_variance_factors(const std::vector<Eigen::
                                                        const std::vector<std::size_t>& pool, std::size_t minimum_edges,
                                                        const PoseGraphOptions& options = {});
 
+/// Baarda's outlier statistic of one edge's rotation and translation blocks: χ²_b / r_b, the block's
+/// χ² = e_bᵀ Ω_b e_b over its redundancy (edge_redundancies). For a single observation it is Baarda's
+/// squared w-statistic (the residual over its own standard deviation); a right edge under a calibrated
+/// information has expectation 1, a wrong one grows with the square of its error. 0 for a block under
+/// 0.05 redundancy: the edge alone fixes it, nothing in the graph can test it.
+struct EdgeOutlierStatistic {
+  double rotation = 0.0;     ///< χ²_rot / r_rot
+  double translation = 0.0;  ///< χ²_trans / r_trans
+  /// The larger of the two.
+  double largest() const { return rotation > translation ? rotation : translation; }
+};
+
+/// Each edge's EdgeOutlierStatistic at `poses` (a solved graph). Throws as edge_redundancies does.
+std::vector<EdgeOutlierStatistic> edge_outlier_statistics(const std::vector<Eigen::Isometry3d>& poses,
+                                                          const std::vector<PoseGraphEdge>& edges,
+                                                          const PoseGraphOptions& options = {});
+
+/// What snoop_pose_graph removed.
+struct DataSnooping {
+  std::vector<std::size_t> removed;  ///< indices into the edges given, in the order they left
+  std::vector<double> statistic;     ///< each removed edge's EdgeOutlierStatistic::largest() when it left
+  bool exhausted = false;            ///< stopped at maximum_removals with an edge still above the threshold
+};
+
+/// Baarda's iterative data snooping (Baarda 1968; one edge at a time, since a wrong edge pulls its
+/// neighbours' residuals up with it): solve the graph of `edges` but those removed from `poses`, find the
+/// edge with `testable` set whose EdgeOutlierStatistic::largest() is the largest, and remove it while
+/// that exceeds `threshold`; at most `maximum_removals` edges. The informations must be calibrated
+/// (estimate_variance_factors) for the threshold to mean anything. `poses` ends solved without the
+/// removed edges. An edge that alone joins two parts of the graph is never removed (its redundancy is 0).
+/// Throws quadrix::Error when `testable` and `edges` differ in size, or as edge_redundancies does.
+DataSnooping snoop_pose_graph(std::vector<Eigen::Isometry3d>& poses, const std::vector<PoseGraphEdge>& edges,
+                              const std::vector<bool>& testable, double threshold, std::size_t maximum_removals,
+                              const PoseGraphOptions& options = {});
+
 /// Scales an information matrix Ω into S Ω S with S = diag(1/√rotation_factor I₃, 1/√translation_factor
 /// I₃): the rotation block's variances grow by rotation_factor, the translation block's by
 /// translation_factor, and the matrix stays symmetric positive semi-definite (cross terms scaled by both).

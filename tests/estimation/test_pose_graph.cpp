@@ -251,5 +251,99 @@ TEST(PoseGraph, VarianceFactorsPoolSmallGroupsAndLeaveUncontradictedOnesAlone) {
   EXPECT_TRUE(scaled.isApprox(scaled.transpose()));
 }
 
+// Baarda's data snooping on a calibrated graph: a loop edge that slid 3 m along the path with its
+// heading right (a street's degeneracy), and one 10 deg off, among right loop edges whose
+// information states their true accuracy. Over seeds, the outlier test removes exactly the two wrong
+// edges, first, and no right one (each right edge's statistic has expectation 1; the threshold is 100).
+TEST(PoseGraph, DataSnoopingRemovesTheWrongLoopEdgesAndNoRightOne) {
+  const double degree = kPi / 180;
+  for (unsigned seed : {41u, 42u, 43u, 44u, 45u, 46u}) {
+    std::mt19937 random(seed);
+    std::vector<Eigen::Isometry3d> truth;
+    for (int index = 0; index < 80; ++index) truth.push_back(pose_at(2.0 * index, 5.0 * std::sin(0.05 * index), 0.02 * index));
+    std::vector<PoseGraphEdge> edges;
+    std::vector<Eigen::Isometry3d> poses{truth[0]};
+    for (std::size_t index = 1; index < truth.size(); ++index) {
+      const Eigen::Isometry3d step = noisy(truth[index - 1].inverse() * truth[index], 0.05 * degree, 0.02, random);
+      poses.push_back(poses.back() * step);
+      edges.push_back({index, index - 1, step, information(0.05 * degree, 0.02), false});
+    }
+    const std::size_t first_loop = edges.size();
+    for (std::size_t index = 2; index < truth.size(); ++index)
+      edges.push_back({index, index - 2, noisy(truth[index - 2].inverse() * truth[index], 0.05 * degree, 0.01, random),
+                       information(0.05 * degree, 0.01), true});
+    std::uniform_int_distribution<std::size_t> pick(first_loop + 5, edges.size() - 5);
+    const std::size_t slid = pick(random);
+    std::size_t turned = pick(random);
+    while (turned + 2 >= slid && turned <= slid + 2) turned = pick(random);  // apart, so each is tested by right neighbours
+    // Slide: 3 m along the `to` scan's heading (its x axis), rotation right.
+    Eigen::Isometry3d along = Eigen::Isometry3d::Identity();
+    along.translation() = 3.0 * Eigen::Vector3d::UnitX();
+    edges[slid].measurement = along * edges[slid].measurement;
+    Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+    turn.linear() = Eigen::AngleAxisd(10.0 * degree, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    edges[turned].measurement = turn * edges[turned].measurement;
+    std::vector<bool> testable(edges.size(), false);
+    for (std::size_t k = first_loop; k < edges.size(); ++k) testable[k] = true;
+    const DataSnooping snooping = snoop_pose_graph(poses, edges, testable, 100.0, 10);
+    ASSERT_EQ(snooping.removed.size(), 2u) << "seed " << seed;
+    EXPECT_TRUE((snooping.removed[0] == slid && snooping.removed[1] == turned) ||
+                (snooping.removed[0] == turned && snooping.removed[1] == slid)) << "seed " << seed;
+    EXPECT_FALSE(snooping.exhausted);
+    for (double statistic : snooping.statistic) EXPECT_GT(statistic, 100.0);
+    // The poses come back solved without them: as the graph of the right edges alone solves.
+    std::vector<PoseGraphEdge> remaining;
+    for (std::size_t k = 0; k < edges.size(); ++k)
+      if (k != slid && k != turned) remaining.push_back(edges[k]);
+    std::vector<Eigen::Isometry3d> right_only = poses;
+    optimise_pose_graph(right_only, remaining);
+    EXPECT_LT(position_rmse(poses, right_only), 1e-4) << "seed " << seed;
+    // Right edges after the removal: their statistics scatter around 1.
+    double sum = 0.0;
+    std::size_t tested = 0;
+    for (const EdgeOutlierStatistic& statistic : edge_outlier_statistics(poses, remaining))
+      if (statistic.translation > 0.0) sum += statistic.translation, ++tested;
+    EXPECT_GT(sum / tested, 0.5) << "seed " << seed;
+    EXPECT_LT(sum / tested, 2.0) << "seed " << seed;
+  }
+}
+
+// What data snooping must not do: remove an edge that alone joins two parts of the graph (nothing
+// tests it, its redundancy is 0), an edge not marked testable, or go past its budget silently.
+TEST(PoseGraph, DataSnoopingLeavesBridgesAndUntestableEdgesAndReportsItsBudget) {
+  const double degree = kPi / 180;
+  std::vector<Eigen::Isometry3d> truth;
+  for (int index = 0; index < 6; ++index) truth.push_back(pose_at(index, 0, 0));
+  // Two chains, 0-1-2 and 3-4-5, joined by one wrong edge only (3 -> 2 off by 5 m).
+  std::vector<PoseGraphEdge> edges;
+  for (std::size_t index : {1u, 2u, 4u, 5u})
+    edges.push_back({index, index - 1, truth[index - 1].inverse() * truth[index], information(0.1 * degree, 0.01), false});
+  Eigen::Isometry3d bridge = truth[2].inverse() * truth[3];
+  bridge.translation().y() += 5.0;
+  edges.push_back({3, 2, bridge, information(0.1 * degree, 0.01), true});
+  std::vector<Eigen::Isometry3d> poses = truth;
+  DataSnooping snooping = snoop_pose_graph(poses, edges, std::vector<bool>(edges.size(), true), 100.0, 10);
+  EXPECT_TRUE(snooping.removed.empty());
+  // Two edges each shifted 1 m in a triangle 0-1-2, both far above the threshold: the testable one
+  // leaves, the other stays.
+  edges = {{1, 0, truth[0].inverse() * truth[1], information(0.1 * degree, 0.01), false},
+           {2, 1, truth[1].inverse() * truth[2], information(0.1 * degree, 0.01), false}};
+  Eigen::Isometry3d shifted = truth[0].inverse() * truth[2];
+  shifted.translation().y() += 1.0;
+  edges.push_back({2, 0, shifted, information(0.1 * degree, 0.01), true});
+  edges.push_back({2, 0, shifted, information(0.1 * degree, 0.01), true});
+  poses = truth;
+  snooping = snoop_pose_graph(poses, edges, {false, false, true, false}, 100.0, 10);
+  ASSERT_EQ(snooping.removed.size(), 1u);
+  EXPECT_EQ(snooping.removed[0], 2u);
+  EXPECT_FALSE(snooping.exhausted);
+  // Testable with a budget of one: one leaves, and the run says it stopped with more above.
+  poses = truth;
+  snooping = snoop_pose_graph(poses, edges, {false, false, true, true}, 100.0, 1);
+  EXPECT_EQ(snooping.removed.size(), 1u);
+  EXPECT_TRUE(snooping.exhausted);
+  EXPECT_THROW(snoop_pose_graph(poses, edges, {true}, 100.0, 1), Error);
+}
+
 }  // namespace
 }  // namespace quadrix
