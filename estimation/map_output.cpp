@@ -168,7 +168,9 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
   for (std::size_t round = 0; round < result.calibration_costs.size(); ++round)
     json << (round == 0 ? "" : ", ") << json_number(result.calibration_costs[round]);
   json << "],\n  \"calibration_converged\": " << (result.calibration_converged ? "true" : "false")
-       << ",\n  \"calibration_note\": " << json_string(result.calibration_note);
+       << ",\n  \"calibration_note\": " << json_string(result.calibration_note)
+       << ",\n  \"outlier_edges\": " << result.outlier_edges
+       << ",\n  \"outlier_test_exhausted\": " << (result.outlier_test_exhausted ? "true" : "false");
   json << ",\n  \"edges\": {";
   first = true;
   for (const auto& [name, value] : counts) json << (first ? "" : ", ") << json_string(name) << ": " << value, first = false;

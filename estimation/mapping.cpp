@@ -491,6 +491,8 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
   if (count == 0) throw Error(list.source + ": no scans listed");
   if (!(options.information_tolerance > 1.0 && options.information_tolerance < 1e3))
     throw Error("option 'information_tolerance' must be above 1 and below 1000, got " + std::to_string(options.information_tolerance));
+  if (!(options.outlier_threshold >= 0.0 && std::isfinite(options.outlier_threshold)))
+    throw Error("option 'outlier_threshold' must be a finite number of at least 0, got " + std::to_string(options.outlier_threshold));
   if (options.information_rounds > kMaximumInformationRounds)
     throw Error("option 'information_rounds' must be at most " + std::to_string(kMaximumInformationRounds) + ", got " +
                 std::to_string(options.information_rounds));
@@ -956,44 +958,83 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       }
       group_of_edge[index] = found->second;
     }
-    for (std::size_t round = 0; round < options.information_rounds; ++round) {
+    // Rounds of estimate_variance_factors, each followed by a solve, until the factors settle.
+    const auto calibrate = [&] {
+      for (std::size_t round = 0; round < options.information_rounds; ++round) {
+        std::vector<PoseGraphEdge> graph_edges;
+        std::vector<std::size_t> graph_edge_of, graph_groups;
+        used_graph(graph_edges, graph_edge_of);
+        for (const std::size_t index : graph_edge_of) graph_groups.push_back(group_of_edge[index]);
+        std::vector<VarianceFactors> factors;
+        try {
+          factors = estimate_variance_factors(result.poses, graph_edges, graph_groups, result.information_groups.size(), pool,
+                                              options.information_minimum_edges, options.graph);
+        } catch (const Error& error) {
+          // A graph whose covariance cannot be formed (a pose only edges without information reach)
+          // keeps the weights of the last round: the map stands, only uncalibrated.
+          result.calibration_note = std::string("calibration stopped: ") + error.what();
+          return false;
+        }
+        for (std::size_t g = 0; g < factors.size(); ++g) {
+          InformationGroup& group = result.information_groups[g];
+          group.edges = factors[g].edges;
+          group.rotation_factor *= factors[g].rotation;
+          group.translation_factor *= factors[g].translation;
+          group.pooled = factors[g].pooled;
+          group.measured = factors[g].measured;
+        }
+        result.calibration_converged = std::all_of(factors.begin(), factors.end(), [&](const VarianceFactors& factor) {
+          const auto within = [&](double value) {
+            return value <= options.information_tolerance && value >= 1.0 / options.information_tolerance;
+          };
+          return within(factor.rotation) && within(factor.translation);
+        });
+        for (std::size_t k = 0; k < graph_edge_of.size(); ++k) {
+          const VarianceFactors& factor = factors[graph_groups[k]];
+          MapEdge& edge = result.edges[graph_edge_of[k]];
+          edge.information = scaled_information(edge.information, factor.rotation, factor.translation);
+        }
+        solve_graph();
+        result.calibration_costs.push_back(result.graph.final_cost);
+        if (progress) progress("information calibration rounds", round + 1, options.information_rounds);
+        if (result.calibration_converged) break;
+      }
+      return true;
+    };
+    // Baarda's data snooping on the calibrated graph (snoop_pose_graph): a loop edge whose residual
+    // is far beyond what the rest of the graph leaves it, in the units its own group's accuracy
+    // sets, leaves the graph. The odometry gate cannot see a wrong edge that slid a few metres along a
+    // street close to its scans' path (its allowance grows with the path); the rest of a calibrated
+    // graph holds such a pair to centimetres. Odometry edges are not tested: they hold the sessions
+    // together.
+    if (calibrate() && options.outlier_threshold > 0.0) {
       std::vector<PoseGraphEdge> graph_edges;
-      std::vector<std::size_t> graph_edge_of, graph_groups;
+      std::vector<std::size_t> graph_edge_of;
       used_graph(graph_edges, graph_edge_of);
-      for (const std::size_t index : graph_edge_of) graph_groups.push_back(group_of_edge[index]);
-      std::vector<VarianceFactors> factors;
+      std::vector<bool> testable(graph_edges.size(), false);
+      for (std::size_t k = 0; k < graph_edges.size(); ++k) testable[k] = result.edges[graph_edge_of[k]].kind == MapEdgeKind::Loop;
+      std::vector<Eigen::Isometry3d> snooped_poses = result.poses;
       try {
-        factors = estimate_variance_factors(result.poses, graph_edges, graph_groups, result.information_groups.size(), pool,
-                                            options.information_minimum_edges, options.graph);
+        const DataSnooping snooping = snoop_pose_graph(snooped_poses, graph_edges, testable, options.outlier_threshold,
+                                                       options.maximum_outlier_removals, options.graph);
+        for (std::size_t removal = 0; removal < snooping.removed.size(); ++removal) {
+          MapEdge& edge = result.edges[graph_edge_of[snooping.removed[removal]]];
+          edge.used = false;
+          char text[200];
+          std::snprintf(text, sizeof text,
+                        "not in the graph: outlier test (its residual's chi-square over its redundancy is %.3g, limit %.3g)",
+                        snooping.statistic[removal], options.outlier_threshold);
+          edge.note = text + (edge.note.empty() ? std::string() : "; " + edge.note);
+        }
+        result.outlier_edges = snooping.removed.size();
+        result.outlier_test_exhausted = snooping.exhausted;
+        if (!snooping.removed.empty()) {
+          solve_graph();
+          calibrate();
+        }
       } catch (const Error& error) {
-        // A graph whose covariance cannot be formed (a pose only edges without information reach)
-        // keeps the weights of the last round: the map stands, only uncalibrated.
-        result.calibration_note = std::string("calibration stopped: ") + error.what();
-        break;
+        result.calibration_note = std::string("outlier test stopped: ") + error.what();
       }
-      for (std::size_t g = 0; g < factors.size(); ++g) {
-        InformationGroup& group = result.information_groups[g];
-        group.edges = factors[g].edges;
-        group.rotation_factor *= factors[g].rotation;
-        group.translation_factor *= factors[g].translation;
-        group.pooled = factors[g].pooled;
-        group.measured = factors[g].measured;
-      }
-      result.calibration_converged = std::all_of(factors.begin(), factors.end(), [&](const VarianceFactors& factor) {
-        const auto within = [&](double value) {
-          return value <= options.information_tolerance && value >= 1.0 / options.information_tolerance;
-        };
-        return within(factor.rotation) && within(factor.translation);
-      });
-      for (std::size_t k = 0; k < graph_edge_of.size(); ++k) {
-        const VarianceFactors& factor = factors[graph_groups[k]];
-        MapEdge& edge = result.edges[graph_edge_of[k]];
-        edge.information = scaled_information(edge.information, factor.rotation, factor.translation);
-      }
-      solve_graph();
-      result.calibration_costs.push_back(result.graph.final_cost);
-      if (progress) progress("information calibration rounds", round + 1, options.information_rounds);
-      if (result.calibration_converged) break;
     }
     result.timings_ms["graph"] += elapsed_ms(calibration_start);
   }

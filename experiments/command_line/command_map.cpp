@@ -73,7 +73,8 @@ int run_on_scheduler(const MapCommandOptions& options) {
                                      "--joint-radius", number(options.map.joint_radius), "--ambiguous-gate-translation",
                                      number(options.map.ambiguous_gate_translation), "--ambiguous-gate-rotation",
                                      number(options.map.ambiguous_gate_rotation_degrees), "--information-rounds",
-                                     std::to_string(options.map.information_rounds)});
+                                     std::to_string(options.map.information_rounds), "--outlier-threshold",
+                                     number(options.map.outlier_threshold)});
   if (!options.map.use_ambiguous_joint_edges) arguments.push_back("--no-ambiguous-joint-edges");
   if (!options.map.use_ambiguous_edges) arguments.push_back("--no-ambiguous-edges");
   if (options.map.use_ambiguous_edges_across_sessions) arguments.push_back("--ambiguous-edges-across-sessions");
@@ -167,6 +168,9 @@ void run(const MapCommandOptions& options) {
                     !group.measured ? " (unmeasured)" : group.pooled ? " (pooled)" : "");
     std::printf("\n");
   }
+  if (result.outlier_edges > 0)
+    std::printf("outlier test: %zu loop edges left the graph (edges.csv notes their statistic)%s\n", result.outlier_edges,
+                result.outlier_test_exhausted ? "; stopped at the most it may remove with more above the threshold" : "");
   if (!result.calibration_note.empty()) std::printf("warning: %s\n", result.calibration_note.c_str());
   if (alone > 0) std::printf("warning: %zu scans belong to sessions joined to no other: left in their own frames (frame = own)\n", alone);
   std::printf("time: %.1f s, %.0f ms a scan (modelling %.0f ms, registration %.0f ms, graph %.0f ms in all)\n",
@@ -241,6 +245,11 @@ const CommandRegistration registration(75, [](CLI::App& app) {
                       "At most this many rounds of variance component estimation after the last solve: each group of edges (odometry per "
                       "session, loop edges per pair of sessions) is weighted by what its residuals measured (0: the information as given)")
       ->check(CLI::Range(std::size_t{0}, kMaximumInformationRounds))
+      ->capture_default_str();
+  command->add_option("--outlier-threshold", options->map.outlier_threshold,
+                      "After the calibration, loop edges leave the graph one at a time while the largest chi-square over redundancy "
+                      "(Baarda's outlier statistic) exceeds this (0: no test)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_option("--map-voxel", options->map.map_voxel, "map.ply keeps one point per cube of this edge, m");
   command->callback([options] { run(*options); });

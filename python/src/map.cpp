@@ -78,6 +78,8 @@ MapOptions map_options_from(const py::dict& keywords) {
       else if (key == "information_rounds") options.information_rounds = value.cast<std::size_t>();
       else if (key == "information_minimum_edges") options.information_minimum_edges = value.cast<std::size_t>();
       else if (key == "information_tolerance") options.information_tolerance = value.cast<double>();
+      else if (key == "outlier_threshold") options.outlier_threshold = value.cast<double>();
+      else if (key == "maximum_outlier_removals") options.maximum_outlier_removals = value.cast<std::size_t>();
       else if (key == "map_voxel") options.map_voxel = value.cast<double>();
       else if (key == "cloud_cache") options.cloud_cache = value.cast<std::size_t>();
       else if (key == "config") config = py::reinterpret_borrow<py::object>(value);
@@ -282,6 +284,8 @@ graph's summary, the timings and, when truth was given, the evaluation.
         }
         return groups;
       }, "The information calibration per group of used edges (name, edges, rotation_factor, translation_factor, pooled, measured), as report.json's information_groups.")
+      .def_property_readonly("outlier_edges", [](const MapRun& run) { return run.result.outlier_edges; },
+                             "Used loop edges the outlier test took out of the graph (their notes in edges say why).")
       .def_property_readonly("timings_ms", [](const MapRun& run) { return run.result.timings_ms; }, "Time of each stage, ms.")
       .def_property_readonly("presets", [](const MapRun& run) { return run.result.presets; }, "The preset each scan was modelled with.")
       .def_property_readonly("candidates_within", [](const MapRun& run) { return run.result.candidates_within; },
@@ -476,7 +480,7 @@ use_ambiguous_edges_across_sessions, odometry_gate_sigmas, loop_information_from
 loop_information_scale,
 loop_translation_sigma, loop_rotation_sigma_degrees, odometry_translation_drift,
 odometry_rotation_drift_degrees, odometry_translation_floor, odometry_rotation_floor_degrees,
-information_rounds, information_minimum_edges, information_tolerance, map_voxel, cloud_cache) and config (a dict or YAML file of registration options for a named preset).
+information_rounds, information_minimum_edges, information_tolerance, outlier_threshold, maximum_outlier_removals, map_voxel, cloud_cache) and config (a dict or YAML file of registration options for a named preset).
 )doc");
 }
 
