@@ -12,7 +12,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <list>
@@ -34,44 +36,78 @@ constexpr double kDegrees = kPi / 180.0;  // radians in a degree
 constexpr int kDescriptorRings = 20;
 constexpr int kDescriptorSectors = 60;
 constexpr double kDescriptorRingWidth = 2.0;  // m: 20 rings reach 40 m
+constexpr int kDescriptorFirstRing = 2;       // rings within 4 m hold the platform and the points every sensor misses under it
+/// The height band above the ground every sensor sees at every range of the grid: HDL-64E looks
+/// 2 deg up, VLP-16 15 deg down, so the band between a car's sill and roof is in all their views.
+constexpr double kBandLow = 0.5, kBandHigh = 2.5;  // m above the ground
+/// Fewer sectors seen by both scans than this: no comparison (a Livox's 70 deg field of view is 12).
+constexpr int kMinimumCommonSectors = 6;
 
-/// A rotation-invariant bird's-eye descriptor of a scan (the ring key of Scan Context, Kim and Kim
-/// 2018): the points around the up axis binned into 20 rings of 2 m and 60 sectors; per ring, the
-/// share of occupied sectors and the mean height of their highest point above the scan's lowest
-/// (10 m clamps it). A turn of the sensor permutes sectors within a ring and changes neither.
-Eigen::VectorXd ring_descriptor(const PointCloud& cloud, const Eigen::Vector3d& up) {
+}  // namespace
+
+Eigen::VectorXd place_descriptor(const PointCloud& cloud, const Eigen::Vector3d& up) {
   const Eigen::Vector3d axis = up.normalized();
   const Eigen::Vector3d east = (std::abs(axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).cross(axis).normalized();
   const Eigen::Vector3d north = axis.cross(east);
-  std::vector<float> highest(kDescriptorRings * kDescriptorSectors, -1e30f);
-  double lowest = 1e30;
+  // The ground's height: the 5th percentile of the heights 3-20 m around the sensor.
+  std::vector<double> heights;
   for (std::size_t index = 0; index < cloud.size(); ++index) {
     const Eigen::Vector3d point = cloud.point(index);
-    const double x = point.dot(east), y = point.dot(north), z = point.dot(axis);
+    const double range = std::hypot(point.dot(east), point.dot(north));
+    if (range > 3.0 && range < 20.0) heights.push_back(point.dot(axis));
+  }
+  double ground = 0.0;
+  if (!heights.empty()) {
+    const auto fifth = heights.begin() + static_cast<std::ptrdiff_t>(heights.size() / 20);
+    std::nth_element(heights.begin(), fifth, heights.end());
+    ground = *fifth;
+  }
+  Eigen::VectorXd descriptor = Eigen::VectorXd::Zero(2 * kDescriptorSectors);
+  std::vector<std::uint32_t> occupied(kDescriptorSectors, 0);
+  for (std::size_t index = 0; index < cloud.size(); ++index) {
+    const Eigen::Vector3d point = cloud.point(index);
+    const double x = point.dot(east), y = point.dot(north);
     const double range = std::hypot(x, y);
     const int ring = static_cast<int>(range / kDescriptorRingWidth);
-    if (ring >= kDescriptorRings || range < 1.0) continue;
-    const double angle = std::atan2(y, x) + 3.14159265358979323846;
-    const int sector = std::min(kDescriptorSectors - 1, static_cast<int>(angle / (2.0 * 3.14159265358979323846) * kDescriptorSectors));
-    float& cell = highest[static_cast<std::size_t>(ring * kDescriptorSectors + sector)];
-    cell = std::max(cell, static_cast<float>(z));
-    lowest = std::min(lowest, z);
+    if (ring < kDescriptorFirstRing || ring >= kDescriptorRings) continue;
+    const int sector = std::min(kDescriptorSectors - 1, static_cast<int>((std::atan2(y, x) + kPi) / (2.0 * kPi) * kDescriptorSectors));
+    descriptor(kDescriptorSectors + sector) = 1.0;  // seen
+    const double height = point.dot(axis) - ground;
+    if (height >= kBandLow && height <= kBandHigh) occupied[static_cast<std::size_t>(sector)] |= 1u << (ring - kDescriptorFirstRing);
   }
-  Eigen::VectorXd descriptor = Eigen::VectorXd::Zero(2 * kDescriptorRings);
-  for (int ring = 0; ring < kDescriptorRings; ++ring) {
-    int occupied = 0;
-    double height = 0.0;
-    for (int sector = 0; sector < kDescriptorSectors; ++sector) {
-      const float cell = highest[static_cast<std::size_t>(ring * kDescriptorSectors + sector)];
-      if (cell < -1e29f) continue;
-      ++occupied;
-      height += std::min(10.0, static_cast<double>(cell) - lowest);
-    }
-    descriptor(ring) = static_cast<double>(occupied) / kDescriptorSectors;
-    descriptor(kDescriptorRings + ring) = occupied > 0 ? height / occupied / 10.0 : 0.0;
-  }
+  for (int sector = 0; sector < kDescriptorSectors; ++sector) descriptor(sector) = static_cast<double>(occupied[static_cast<std::size_t>(sector)]);
   return descriptor;
 }
+
+double place_distance(const Eigen::VectorXd& first, const Eigen::VectorXd& second) {
+  if (first.size() != 2 * kDescriptorSectors || second.size() != 2 * kDescriptorSectors)
+    throw Error("place_distance: descriptors of " + std::to_string(2 * kDescriptorSectors) + " values expected, got " +
+                std::to_string(first.size()) + " and " + std::to_string(second.size()));
+  std::array<std::uint32_t, kDescriptorSectors> a{}, b{};
+  std::array<bool, kDescriptorSectors> a_seen{}, b_seen{};
+  for (int sector = 0; sector < kDescriptorSectors; ++sector) {
+    a[sector] = static_cast<std::uint32_t>(first(sector));
+    b[sector] = static_cast<std::uint32_t>(second(sector));
+    a_seen[sector] = first(kDescriptorSectors + sector) > 0.5;
+    b_seen[sector] = second(kDescriptorSectors + sector) > 0.5;
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (int shift = 0; shift < kDescriptorSectors; ++shift) {
+    double similarity = 0.0;
+    int common = 0;
+    for (int sector = 0; sector < kDescriptorSectors; ++sector) {
+      const int other = (sector + shift) % kDescriptorSectors;
+      if (!a_seen[sector] || !b_seen[other]) continue;
+      ++common;
+      const int a_count = __builtin_popcount(a[sector]), b_count = __builtin_popcount(b[other]);
+      if (a_count > 0 && b_count > 0) similarity += __builtin_popcount(a[sector] & b[other]) / std::sqrt(double(a_count) * b_count);
+    }
+    if (common >= kMinimumCommonSectors) best = std::min(best, 1.0 - similarity / common);
+  }
+  return best;
+}
+
+namespace {
 
 /// A few clouds kept in memory for verification, least recently used dropped first.
 class CloudCache {
@@ -106,7 +142,7 @@ struct ScanModel {
   SceneModel model;                 ///< as model_scene built it
   std::optional<SceneModel> augmented;  ///< the same with augmented points, when model_scene gave none (augment_other_side's copy, made once)
   RegistrationOptions options;      ///< its preset's options (auto: resolved on this scan); source_extraction is what it was modelled with
-  Eigen::VectorXd descriptor;       ///< ring_descriptor
+  Eigen::VectorXd descriptor;       ///< place_descriptor
   std::string preset;               ///< preset name or the auto choice's reasons
   double modelling_ms = 0.0;        ///< model_scene time
 };
@@ -176,7 +212,7 @@ ScanModel model_one_scan(const ScanList& list, std::size_t index, const MapOptio
   }
   scan.modelling_ms = elapsed_ms(start);
   scan.model = std::move(modelling.model);
-  scan.descriptor = ring_descriptor(cloud, resolved.source_extraction.up);
+  scan.descriptor = place_descriptor(cloud, resolved.source_extraction.up);
   return scan;
 }
 
@@ -673,18 +709,23 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     const Clock::time_point candidates_start = Clock::now();
     std::vector<std::pair<std::size_t, std::size_t>> pairs;
     result.place_ranking.assign(count, {});
+    std::vector<std::size_t> queries;
     for (std::size_t session = 1; session < sessions.size(); ++session)
-      for (std::size_t index = sessions[session].first; index < sessions[session].second; index += std::max<std::size_t>(1, options.place_query_stride)) {
-        std::vector<std::pair<double, std::size_t>> ranked;
-        for (std::size_t other = 0; other < sessions[session].first; ++other)
-          ranked.emplace_back((models[index].descriptor - models[other].descriptor).norm(), other);
-        const std::size_t keep = std::min(options.place_candidates_per_scan, ranked.size());
-        std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(keep), ranked.end());
-        for (std::size_t k = 0; k < keep; ++k) {
-          result.place_ranking[index].push_back(ranked[k].second);
-          pairs.emplace_back(index, ranked[k].second);
-        }
-      }
+      for (std::size_t index = sessions[session].first; index < sessions[session].second; index += std::max<std::size_t>(1, options.place_query_stride))
+        queries.push_back(index);
+    // Each query against every scan of the earlier sessions (a rotation search per pair): in parallel.
+    tbb::parallel_for(std::size_t{0}, queries.size(), [&](std::size_t query) {
+      const std::size_t index = queries[query];
+      std::vector<std::pair<double, std::size_t>> ranked;
+      for (std::size_t other = 0; other < sessions[session_of[index]].first; ++other)
+        ranked.emplace_back(place_distance(models[index].descriptor, models[other].descriptor), other);
+      const std::size_t keep = std::min(options.place_candidates_per_scan, ranked.size());
+      std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(keep), ranked.end());
+      for (std::size_t k = 0; k < keep; ++k)
+        if (std::isfinite(ranked[k].first)) result.place_ranking[index].push_back(ranked[k].second);
+    });
+    for (const std::size_t index : queries)
+      for (const std::size_t other : result.place_ranking[index]) pairs.emplace_back(index, other);
     result.candidates_across = pairs.size();
     candidates_ms += elapsed_ms(candidates_start);
     const Clock::time_point registration_start = Clock::now();

@@ -6,7 +6,8 @@
 //             motion verified by the registration's checks, else global registration),
 //   candidates within a session by radius search around the odometry position (LIO-SAM), the radius
 //             growing with the distance travelled since the last accepted loop; across sessions by
-//             a rotation-invariant bird's-eye ring descriptor of each scan, then, once sessions are
+//             a bird's-eye place descriptor of each scan matched under every heading (Scan Context on
+//             the height band every sensor sees: place_descriptor), then, once sessions are
 //             placed in the map frame, by radius search there (rounds, each followed by a solve),
 //   register  candidate pairs from their cached models (register_models), verified on the clouds
 //             loaded on demand (verify_registration),
@@ -79,7 +80,7 @@ struct MapOptions {
   double outlier_threshold = 100.0;            ///< after the information calibration, used loop edges leave the graph one at a time while the largest Baarda statistic (a block's χ² over its redundancy, snoop_pose_graph) exceeds this, and the calibration runs again (0: no test; needs information_rounds > 0). Tuning drives: right edges within 0.3 m and 1 deg of the truth reach 73 (1,062 edges), 12 of 21 right ones 0.3-2 m off exceed it and leaving them out moved the ATE by 1 mm (docs/mapping.md)
   std::size_t maximum_outlier_removals = 50;   ///< at most this many edges leave by that test in one run (each costs a graph solve and its covariance); more is reported as a warning
   double information_tolerance = 1.5;          ///< the rounds stop once every group's factors lie within 1/this .. this (tuning drive: within 1.5 after 5 rounds, the ATE changing by under 1 cm a round from the third)
-  std::size_t information_minimum_edges = 10;  ///< a group with fewer used edges takes the factors of all odometry or all loop edges (a median of a few χ² is noise)
+  std::size_t information_minimum_edges = 5;   ///< a group with fewer used edges takes the factors of all odometry or all loop edges (a median of a few χ² is noise; pooling larger groups gave a session with exact odometry the weight of one drifting 0.7 deg/m: 0.157 m ATE where 7-edge groups of their own gave 0.049 m, two interleaved sessions of the BALM walk, docs/mapping.md)
   PoseGraphOptions graph;                      ///< DCS Φ and the solver
   double map_voxel = 0.2;                      ///< map.ply keeps one point per cube of this edge, m
   std::size_t cloud_cache = 6;                 ///< clouds kept in memory for verification at once
@@ -98,6 +99,22 @@ struct MapOptions {
 /// departure and the limits when the edge does not agree.
 bool consistent_with_odometry(const Eigen::Isometry3d& measured, const Eigen::Isometry3d& predicted, double path,
                               const MapOptions& options, std::string* why = nullptr);
+
+/// The place descriptor of a scan (Scan Context, Kim and Kim 2018, on what every sensor sees): the
+/// points around the `up` axis binned into 60 sectors and 18 rings of 2 m from 4 to 40 m; a cell is
+/// occupied when a point lies 0.5-2.5 m above the ground (the 5th percentile of the heights 3-20 m
+/// out), the band between a car's sill and its roof that an HDL-64E (2 deg up), a VLP-16 and a Livox
+/// all see, where the highest point of a cell or a ring's share of cells depends on the sensor's
+/// field of view and density. A sector is seen when any point falls in it (a Livox sees 12 of 60).
+/// 120 values: each sector's ring occupancy as a bit mask, then each sector's seen flag.
+Eigen::VectorXd place_descriptor(const PointCloud& cloud, const Eigen::Vector3d& up);
+
+/// Distance of two place descriptors under the best heading: over the 60 sector shifts, 1 - the mean
+/// cosine similarity of the sectors' ring occupancies over the sectors both scans see (a sector
+/// without an occupied cell in either is dissimilar); the smallest over the shifts with at least 6
+/// such sectors, +infinity when none has. 0 for a scan and itself turned by a multiple of 6 deg.
+/// Throws quadrix::Error for descriptors not of place_descriptor's size.
+double place_distance(const Eigen::VectorXd& first, const Eigen::VectorXd& second);
 
 /// Kind of an edge.
 enum class MapEdgeKind { Odometry, Loop };
@@ -192,7 +209,7 @@ using MapProgress = std::function<void(const std::string& stage, std::size_t don
 struct MappedScan {
   SceneModel model;                      ///< as model_scene built it (sensor frame)
   std::optional<SceneModel> augmented;   ///< the same with augmented points, when model_scene gave none and the preset matches them
-  Eigen::VectorXd descriptor;            ///< the bird's-eye ring descriptor of the scan (place recognition)
+  Eigen::VectorXd descriptor;            ///< the scan's place_descriptor (place recognition)
   std::string preset;                    ///< preset name, or the auto choice's reasons
   double modelling_ms = 0.0;             ///< model_scene time
 };

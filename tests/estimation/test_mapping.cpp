@@ -592,12 +592,21 @@ TEST(MappingPlaceConsensus, AWrongOkEdgeBetweenSessionsThatTheOthersContradictLe
   EXPECT_TRUE(checked.in_map_frame.back()) << "the right edges should place b";
   EXPECT_EQ(evaluation.wrong_used_loop_edges, 0u);
   EXPECT_LE(evaluation.ate, 0.4);
-  // The gate opened: the wrong edge is used.
+  // The gate opened: the outlier test on the calibrated graph catches the wrong edge after the solve.
   options.place_consensus_rotation_degrees = 360.0;
   options.place_consensus_translation = 1e9;
   corrupted = false;
+  const MapResult snooped = map_scans(walk.list, options, {}, executor);
+  EXPECT_FALSE(wrong_edge(snooped).used);
+  EXPECT_NE(wrong_edge(snooped).note.find("outlier test"), std::string::npos) << wrong_edge(snooped).note;
+  EXPECT_GE(snooped.outlier_edges, 1u);
+  EXPECT_EQ(evaluate_map(snooped, walk.truth).wrong_used_loop_edges, 0u);
+  // Both off: the wrong edge is used.
+  options.outlier_threshold = 0.0;
+  corrupted = false;
   const MapResult unchecked = map_scans(walk.list, options, {}, executor);
   EXPECT_TRUE(wrong_edge(unchecked).used);
+  EXPECT_EQ(unchecked.outlier_edges, 0u);
   EXPECT_EQ(evaluate_map(unchecked, walk.truth).wrong_used_loop_edges, 1u);
 }
 
@@ -653,6 +662,61 @@ TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
 
 namespace quadrix {
 namespace {
+
+/// A synthetic place: a ground plane 1.8 m below the sensor and 60 boxes (cars, posts,
+/// façade pieces) 4-38 m around, seen by a sensor turned by `heading`, keeping every `stride`-th point
+/// and only those within `field_of_view` of its forward axis (a sparse or narrow sensor).
+PointCloud place_scan(unsigned place, double heading, int stride, double field_of_view) {
+  std::mt19937 random(place);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Eigen::Vector3d> points;
+  for (int box = 0; box < 60; ++box) {
+    const double range = 4.0 + 34.0 * unit(random), bearing = 2.0 * kPi * unit(random);
+    const Eigen::Vector2d centre(range * std::cos(bearing), range * std::sin(bearing));
+    const double width = 0.5 + 3.0 * unit(random), height = 0.8 + 4.0 * unit(random);
+    for (double u = -width / 2; u <= width / 2; u += 0.1)
+      for (double v = -width / 2; v <= width / 2; v += 0.1)
+        for (double z = 0.0; z <= height; z += 0.2) points.emplace_back(centre.x() + u, centre.y() + v, z - 1.8);
+  }
+  for (double x = -40.0; x <= 40.0; x += 0.5)
+    for (double y = -40.0; y <= 40.0; y += 0.5) points.emplace_back(x, y, -1.8);
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(-heading, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  std::vector<Eigen::Vector3f> kept;
+  for (std::size_t index = 0; index < points.size(); index += static_cast<std::size_t>(stride)) {
+    const Eigen::Vector3d local = turn * points[index];
+    if (std::abs(std::atan2(local.y(), local.x())) <= field_of_view / 2) kept.push_back(local.cast<float>());
+  }
+  PointCloud cloud;
+  cloud.positions.resize(3, static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t index = 0; index < kept.size(); ++index) cloud.positions.col(static_cast<Eigen::Index>(index)) = kept[index];
+  return cloud;
+}
+
+// The place descriptor matches a place across headings and sensors: a dense 360 deg scan of each of
+// eight places; the same places seen turned by a random heading, by a sensor with an eighth of the
+// points, and by one with a 70 deg field of view (a Livox's) rank their own place first among the
+// eight. A scan turned by a whole number of sectors (6 deg) is at distance 0 from itself.
+TEST(PlaceDescriptor, FindsThePlaceUnderAnyHeadingAcrossDensityAndFieldOfView) {
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  std::vector<Eigen::VectorXd> dense;
+  for (unsigned place = 0; place < 8; ++place) dense.push_back(place_descriptor(place_scan(100 + place, 0.0, 1, 2 * kPi), up));
+  EXPECT_EQ(dense[0].size(), 120);
+  EXPECT_NEAR(place_distance(dense[3], place_descriptor(place_scan(103, 30.0 * kPi / 180.0 + 1e-4, 1, 2 * kPi), up)), 0.0, 0.05);
+  std::mt19937 random(17);
+  std::uniform_real_distribution<double> heading(0.0, 2.0 * kPi);
+  for (const auto& [stride, field_of_view] : std::vector<std::pair<int, double>>{{1, 2 * kPi}, {8, 2 * kPi}, {1, 70.0 * kPi / 180.0}})
+    for (unsigned place = 0; place < 8; ++place) {
+      const Eigen::VectorXd query = place_descriptor(place_scan(100 + place, heading(random), stride, field_of_view), up);
+      std::size_t best = 0;
+      for (std::size_t other = 1; other < dense.size(); ++other)
+        if (place_distance(query, dense[other]) < place_distance(query, dense[best])) best = other;
+      EXPECT_EQ(best, place) << "stride " << stride << ", field of view " << field_of_view;
+    }
+  // Nothing seen in common: no comparison.
+  PointCloud empty;
+  EXPECT_TRUE(std::isinf(place_distance(dense[0], place_descriptor(empty, up))));
+  EXPECT_THROW(place_distance(dense[0], Eigen::VectorXd::Zero(40)), Error);
+}
 
 // The odometry gate of loop edges within a session: a right edge a few tens of metres back passes;
 // the same edge turned by a half turn, or shifted by metres, does not; after a long path the gate
