@@ -198,6 +198,11 @@ std::string report_json(const MapResult& result, const MapOptions& options, cons
        << ", \"joint_gate_rotation_degrees\": " << json_number(options.joint_gate_rotation_degrees)
        << ", \"place_consensus_rotation_degrees\": " << json_number(options.place_consensus_rotation_degrees)
        << ", \"place_consensus_translation\": " << json_number(options.place_consensus_translation)
+       << ", \"place_vote_minimum\": " << options.place_vote_minimum
+       << ", \"place_vote_rotation_degrees\": " << json_number(options.place_vote_rotation_degrees)
+       << ", \"place_vote_translation\": " << json_number(options.place_vote_translation)
+       << ", \"place_vote_ratio\": " << json_number(options.place_vote_ratio)
+       << ", \"outlier_threshold\": " << json_number(options.outlier_threshold)
        << ", \"use_ambiguous_joint_edges\": " << (options.use_ambiguous_joint_edges ? "true" : "false")
        << ", \"ambiguous_gate_translation\": " << json_number(options.ambiguous_gate_translation)
        << ", \"ambiguous_gate_rotation_degrees\": " << json_number(options.ambiguous_gate_rotation_degrees)

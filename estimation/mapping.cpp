@@ -764,6 +764,55 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       edge.note = "not in the graph: " + why;
     }
   }
+  // Ambiguous place edges between two sessions enter by a clear vote: each place edge (ok or
+  // ambiguous) measures the later session's odometry frame in the earlier one's; the pose most
+  // edges agree on (within place_vote_*) wins when enough agree and no pose beyond the consensus
+  // gate comes close. A pair of scans of one place by two different sensors is mostly answered
+  // right but `ambiguous` (too little of the sparser cloud lands on the denser one to confirm it),
+  // and a wrong answer agrees with few others; many right ones agree on one pose.
+  if (options.place_vote_minimum > 0) {
+    std::map<std::pair<std::size_t, std::size_t>, std::vector<std::size_t>> place_edges;  // (earlier, later) session -> edges
+    for (std::size_t index = 0; index < loop_edges.size(); ++index) {
+      const MapEdge& edge = loop_edges[index];
+      if (edge.across_sessions && (edge.status == "ok" || edge.status == "ambiguous"))
+        place_edges[std::minmax(session_of[edge.from], session_of[edge.to])].push_back(index);
+    }
+    for (const auto& [session_pair, members] : place_edges) {
+      // The later session's odometry frame in the earlier one's, as each edge measures it.
+      std::vector<Eigen::Isometry3d> frames;
+      for (const std::size_t index : members) {
+        const MapEdge& edge = loop_edges[index];
+        const Eigen::Isometry3d frame = result.odometry[edge.to] * edge.transform * result.odometry[edge.from].inverse();
+        frames.push_back(session_of[edge.from] > session_of[edge.to] ? frame : frame.inverse());
+      }
+      const auto within = [](const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double degrees, double metres) {
+        const PoseDeparture departure = departure_between(a, b);
+        return departure.degrees <= degrees && departure.metres <= metres;
+      };
+      std::vector<std::size_t> support(members.size(), 0);
+      for (std::size_t a = 0; a < members.size(); ++a)
+        for (std::size_t b = 0; b < members.size(); ++b)
+          support[a] += within(frames[a], frames[b], options.place_vote_rotation_degrees, options.place_vote_translation);
+      const std::size_t best = static_cast<std::size_t>(std::max_element(support.begin(), support.end()) - support.begin());
+      std::size_t rival = 0;
+      for (std::size_t other = 0; other < members.size(); ++other)
+        if (!within(frames[best], frames[other], options.place_consensus_rotation_degrees, options.place_consensus_translation))
+          rival = std::max(rival, support[other]);
+      if (support[best] < options.place_vote_minimum || static_cast<double>(support[best]) < options.place_vote_ratio * static_cast<double>(rival))
+        continue;
+      for (std::size_t other = 0; other < members.size(); ++other) {
+        MapEdge& edge = loop_edges[members[other]];
+        if (edge.status != "ambiguous" || edge.used ||
+            !within(frames[best], frames[other], options.place_vote_rotation_degrees, options.place_vote_translation))
+          continue;
+        edge.used = edge.voted = true;
+        char why[160];
+        std::snprintf(why, sizeof why, "in the graph by the place vote: %zu of the %zu place edges between these sessions agree (the largest contradicting vote %zu)",
+                      support[best], members.size(), rival);
+        edge.note = why + (edge.note.rfind("not in the graph", 0) == 0 ? std::string() : "; " + edge.note);
+      }
+    }
+  }
   // Edges between two sessions must agree with each other: each one's relative pose of the two
   // sessions' odometry frames predicts the others (drift between them allowed by the consensus gate);
   // the edges the best-supported one predicts stay, the others leave the graph. When two or more
@@ -855,7 +904,7 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
   std::size_t joint_edges_begin = std::numeric_limits<std::size_t>::max();
   const auto vouched = [&](std::size_t index) {
     const MapEdge& edge = result.edges[index];
-    return edge.status == "ok" || (edge.status == "ambiguous" && (!edge.across_sessions || index >= joint_edges_begin));
+    return edge.status == "ok" || (edge.status == "ambiguous" && (!edge.across_sessions || edge.voted || index >= joint_edges_begin));
   };
   // The graph of the used edges, and the index into result.edges of each of its edges.
   const auto used_graph = [&](std::vector<PoseGraphEdge>& graph_edges, std::vector<std::size_t>& graph_edge_of) {

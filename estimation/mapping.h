@@ -58,6 +58,10 @@ struct MapOptions {
   double joint_gate_rotation_degrees = 15.0;   ///< or its rotation by more than this, degrees
   double place_consensus_rotation_degrees = 30.0;  ///< a used edge between two sessions (place descriptor) stays in only when the relative pose of the sessions' odometry frames most such edges agree on predicts it within this rotation, degrees (three-sensor town drives: right edges predict each other within 6 deg, the odometry's drift between them; a wrong `ok` one departed by 173-180 deg)
   double place_consensus_translation = 50.0;   ///< and within this translation, m (right ones within 22 m, the wrong one by 154-462 m)
+  std::size_t place_vote_minimum = 10;         ///< ambiguous place edges between two sessions enter the graph (under Huber, as `ok` ones) when at least this many place edges (ok or ambiguous) agree on the relative pose of the two sessions' odometry frames within place_vote_rotation_degrees and place_vote_translation, and place_vote_ratio times as many as agree on any pose beyond the place consensus gate (0: never). Cross-sensor pairs of one place are right but rarely `ok` (overlap below the floor); on the three-sensor tuning drive the right ones formed votes of 27 (HDL-64E / VLP-16) and 33 (HDL-64E / Livox), wrong ones at most 6 (docs/mapping.md)
+  double place_vote_rotation_degrees = 3.0;    ///< the vote's agreement in rotation, degrees (right edges of one pair of sessions differ by the two odometries' drift between their places)
+  double place_vote_translation = 10.0;        ///< and in translation, m
+  double place_vote_ratio = 2.0;               ///< the winning vote must be this many times any contradicting one
   bool use_ambiguous_joint_edges = true;       ///< ambiguous edges of the joint-frame rounds that pass the ambiguous gate (ambiguous_gate_*) enter the graph, under Huber as `ok` ones (cross-sensor pairs of one place are right but rarely `ok`: docs/mapping.md)
   double ambiguous_gate_translation = 4.0;     ///< an ambiguous loop edge within a session or of the joint-frame rounds enters the graph only when its translation departs from the relative pose of the map solved without ambiguous edges by at most this, m (three-sensor tuning drive: right ones depart by at most 3.8 m, wrong ones by 4.1 m and by 20-80 m; docs/mapping.md)
   double ambiguous_gate_rotation_degrees = 4.0;///< and its rotation by at most this, degrees (tuning drive: 4 m / 4 deg kept 229 right edges and no wrong one, 5 m / 5 deg 230 and 1; within sessions right ones depart by at most 2.2 deg)
@@ -139,6 +143,7 @@ struct MapEdge {
   std::string status = "ok";                   ///< "given" (odometry from the list), or the registration status
   bool used = false;                           ///< entered the pose graph
   bool across_sessions = false;                ///< joins two sessions
+  bool voted = false;                          ///< an ambiguous place edge let into the graph by the place vote (MapOptions::place_vote_minimum)
   Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();  ///< maps `from` points into the `to` frame
   Information6d information = Information6d::Identity();       ///< rotation then translation
   double overlap = 0.0;                        ///< dense overlap of the registration (0 for given odometry)

@@ -74,7 +74,8 @@ int run_on_scheduler(const MapCommandOptions& options) {
                                      number(options.map.ambiguous_gate_translation), "--ambiguous-gate-rotation",
                                      number(options.map.ambiguous_gate_rotation_degrees), "--information-rounds",
                                      std::to_string(options.map.information_rounds), "--outlier-threshold",
-                                     number(options.map.outlier_threshold)});
+                                     number(options.map.outlier_threshold), "--place-vote",
+                                     std::to_string(options.map.place_vote_minimum)});
   if (!options.map.use_ambiguous_joint_edges) arguments.push_back("--no-ambiguous-joint-edges");
   if (!options.map.use_ambiguous_edges) arguments.push_back("--no-ambiguous-edges");
   if (options.map.use_ambiguous_edges_across_sessions) arguments.push_back("--ambiguous-edges-across-sessions");
@@ -245,6 +246,10 @@ const CommandRegistration registration(75, [](CLI::App& app) {
                       "At most this many rounds of variance component estimation after the last solve: each group of edges (odometry per "
                       "session, loop edges per pair of sessions) is weighted by what its residuals measured (0: the information as given)")
       ->check(CLI::Range(std::size_t{0}, kMaximumInformationRounds))
+      ->capture_default_str();
+  command->add_option("--place-vote", options->map.place_vote_minimum,
+                      "Ambiguous place edges between two sessions enter the graph when at least this many place edges agree on the "
+                      "sessions' relative pose (3 deg, 10 m) and twice as many as on any contradicting pose (0: never)")
       ->capture_default_str();
   command->add_option("--outlier-threshold", options->map.outlier_threshold,
                       "After the calibration, loop edges leave the graph one at a time while the largest chi-square over redundancy "

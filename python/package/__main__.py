@@ -45,6 +45,8 @@ def _parser():
     command.add_argument("--ambiguous-gate-rotation", type=float, help="and within this many degrees")
     command.add_argument("--information-rounds", type=int, help="At most this many rounds of variance component estimation "
                          "after the last solve: each group of edges is weighted by what its residuals measured (0: the information as given)")
+    command.add_argument("--place-vote", type=int, help="Ambiguous place edges between two sessions enter the graph when at "
+                         "least this many place edges agree on the sessions' relative pose and twice as many as on any contradicting one (0: never)")
     command.add_argument("--outlier-threshold", type=float, help="After the calibration, loop edges leave the graph one at a "
                          "time while the largest chi-square over redundancy exceeds this (0: no test)")
     command.add_argument("--map-voxel", type=float, help="map.ply keeps one point per cube of this edge, m")
@@ -61,7 +63,8 @@ def _options(arguments):
              "joint_rounds": "joint_rounds", "joint_radius": "joint_radius",
              "ambiguous_gate_translation": "ambiguous_gate_translation",
              "ambiguous_gate_rotation": "ambiguous_gate_rotation_degrees",
-             "information_rounds": "information_rounds", "outlier_threshold": "outlier_threshold"}
+             "information_rounds": "information_rounds", "outlier_threshold": "outlier_threshold",
+             "place_vote": "place_vote_minimum"}
     options = {"preset": arguments.preset}
     for argument, option in names.items():
         value = getattr(arguments, argument)

@@ -60,6 +60,10 @@ MapOptions map_options_from(const py::dict& keywords) {
       else if (key == "joint_gate_rotation_degrees") options.joint_gate_rotation_degrees = value.cast<double>();
       else if (key == "place_consensus_rotation_degrees") options.place_consensus_rotation_degrees = value.cast<double>();
       else if (key == "place_consensus_translation") options.place_consensus_translation = value.cast<double>();
+      else if (key == "place_vote_minimum") options.place_vote_minimum = value.cast<std::size_t>();
+      else if (key == "place_vote_rotation_degrees") options.place_vote_rotation_degrees = value.cast<double>();
+      else if (key == "place_vote_translation") options.place_vote_translation = value.cast<double>();
+      else if (key == "place_vote_ratio") options.place_vote_ratio = value.cast<double>();
       else if (key == "use_ambiguous_joint_edges") options.use_ambiguous_joint_edges = value.cast<bool>();
       else if (key == "ambiguous_gate_translation") options.ambiguous_gate_translation = value.cast<double>();
       else if (key == "ambiguous_gate_rotation_degrees") options.ambiguous_gate_rotation_degrees = value.cast<double>();
@@ -480,7 +484,7 @@ use_ambiguous_edges_across_sessions, odometry_gate_sigmas, loop_information_from
 loop_information_scale,
 loop_translation_sigma, loop_rotation_sigma_degrees, odometry_translation_drift,
 odometry_rotation_drift_degrees, odometry_translation_floor, odometry_rotation_floor_degrees,
-information_rounds, information_minimum_edges, information_tolerance, outlier_threshold, maximum_outlier_removals, map_voxel, cloud_cache) and config (a dict or YAML file of registration options for a named preset).
+place_vote_minimum, place_vote_rotation_degrees, place_vote_translation, place_vote_ratio, information_rounds, information_minimum_edges, information_tolerance, outlier_threshold, maximum_outlier_removals, map_voxel, cloud_cache) and config (a dict or YAML file of registration options for a named preset).
 )doc");
 }
 

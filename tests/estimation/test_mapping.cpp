@@ -12,6 +12,8 @@
 #include <set>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <optional>
 #include <random>
 #include <functional>
 #include <sstream>
@@ -608,6 +610,80 @@ TEST(MappingPlaceConsensus, AWrongOkEdgeBetweenSessionsThatTheOthersContradictLe
   EXPECT_TRUE(wrong_edge(unchecked).used);
   EXPECT_EQ(unchecked.outlier_edges, 0u);
   EXPECT_EQ(evaluate_map(unchecked, walk.truth).wrong_used_loop_edges, 1u);
+}
+
+// The place vote: every answer between the two sessions is forced to `ambiguous` (as pairs of one
+// place by two different sensors mostly are). Without the vote nothing joins b. With it, the right
+// answers, which agree on one pose of b's frame, join b with no wrong edge used. When every other
+// answer is replaced by a wrong one that agrees with the other wrong ones on another pose (a
+// look-alike place turned round, 60 m off), neither pose wins twice the other's votes, and b is not
+// joined. b's odometry drifts 0.05 deg a metre: the vote needs right edges to agree within 3 deg.
+TEST(MappingPlaceVote, AgreeingAmbiguousAnswersJoinSessionsAndATieWithWrongOnesDoesNot) {
+  QUADRIX_REQUIRE_SHARED_DATA("balm_sequence/poses.txt");
+  TemporaryFolder folder;
+  const DriftedWalk walk = interleaved_sessions(folder.path, 0.05, 5);
+  MapOptions options = edges_across_only(1);
+  options.place_candidates_per_scan = 2;
+  std::map<std::pair<std::size_t, std::size_t>, MapEdge> answers;  // registered once, reused by every run
+  bool corrupt = false;
+  MapExecutor executor;
+  std::vector<std::optional<MappedScan>> models(walk.list.scans.size());  // modelled once, reused by every run
+  executor.model = [&](const std::vector<std::size_t>& scans) {
+    std::vector<MappedScan> modelled;
+    for (std::size_t scan : scans) {
+      if (!models[scan]) models[scan] = model_map_scan(walk.list, scan, options);
+      modelled.push_back(*models[scan]);
+    }
+    return modelled;
+  };
+  executor.register_pairs = [&](const std::vector<MapPairRequest>& pairs) {
+    std::vector<MapEdge> edges;
+    std::size_t across = 0;
+    for (const MapPairRequest& pair : pairs) {
+      const auto key = std::make_pair(pair.from, pair.to);
+      if (!answers.count(key)) answers[key] = register_map_pair(walk.list, pair, *models[pair.from], *models[pair.to], options);
+      MapEdge edge = answers[key];
+      if (walk.list.scans[pair.from].session != walk.list.scans[pair.to].session) {
+        if (edge.status == "ok") edge.status = "ambiguous";
+        if (corrupt && across++ % 2 == 1) {
+          // The same wrong pose of b's frame for each: Z' = Z · O⁻¹ · D · O, O the `from` scan's odometry.
+          Eigen::Isometry3d wrong = Eigen::Isometry3d::Identity();
+          wrong.linear() = Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+          wrong.translation() = Eigen::Vector3d(60.0, 0.0, 0.0);
+          const Eigen::Isometry3d odometry = *walk.list.scans[pair.from].odometry;
+          edge.transform = edge.transform * odometry.inverse() * wrong * odometry;
+          edge.status = "ambiguous";
+        }
+      }
+      edges.push_back(edge);
+    }
+    return edges;
+  };
+  options.place_vote_minimum = 0;
+  const MapResult no_vote = map_scans(walk.list, options, {}, executor);
+  options.place_vote_minimum = 3;
+  const MapResult voted = map_scans(walk.list, options, {}, executor);
+  corrupt = true;
+  const MapResult tied = map_scans(walk.list, options, {}, executor);
+  const MapEvaluation evaluation = evaluate_map(voted, walk.truth);
+  std::size_t voted_edges = 0, right_voted = 0;
+  for (const MapEdge& edge : voted.edges)
+    if (edge.voted) {
+      ++voted_edges;
+      right_voted += registration_succeeded(edge.transform, walk.truth[edge.to].pose.inverse() * walk.truth[edge.from].pose);
+      EXPECT_NE(edge.note.find("place vote"), std::string::npos) << edge.note;
+    }
+  std::printf("place vote: without it b joined %d; with it %zu edges voted in (%zu right), b joined %d, ATE %.3f m, wrong used %zu; "
+              "half the answers wrong and agreeing: b joined %d\n",
+              static_cast<int>(no_vote.in_map_frame.back()), voted_edges, right_voted, static_cast<int>(voted.in_map_frame.back()),
+              evaluation.ate, evaluation.wrong_used_loop_edges, static_cast<int>(tied.in_map_frame.back()));
+  EXPECT_FALSE(no_vote.in_map_frame.back());
+  EXPECT_TRUE(voted.in_map_frame.back());
+  EXPECT_GE(voted_edges, 3u);
+  EXPECT_EQ(evaluation.wrong_used_loop_edges, 0u);
+  EXPECT_LE(evaluation.ate, 0.3);
+  EXPECT_FALSE(tied.in_map_frame.back());
+  for (const MapEdge& edge : tied.edges) EXPECT_FALSE(edge.voted);
 }
 
 TEST(MappingExecutor, TransferBytesRoundTripAndRefuseDamage) {
