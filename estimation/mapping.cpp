@@ -100,7 +100,7 @@ double place_distance(const Eigen::VectorXd& first, const Eigen::VectorXd& secon
       if (!a_seen[sector] || !b_seen[other]) continue;
       ++common;
       const int a_count = __builtin_popcount(a[sector]), b_count = __builtin_popcount(b[other]);
-      if (a_count > 0 && b_count > 0) similarity += __builtin_popcount(a[sector] & b[other]) / std::sqrt(double(a_count) * b_count);
+      if (a_count > 0 && b_count > 0) similarity += __builtin_popcount(a[sector] & b[other]) / std::sqrt(static_cast<double>(a_count) * b_count);
     }
     if (common >= kMinimumCommonSectors) best = std::min(best, 1.0 - similarity / common);
   }
@@ -529,6 +529,12 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     throw Error("option 'information_tolerance' must be above 1 and below 1000, got " + std::to_string(options.information_tolerance));
   if (!(options.outlier_threshold >= 0.0 && std::isfinite(options.outlier_threshold)))
     throw Error("option 'outlier_threshold' must be a finite number of at least 0, got " + std::to_string(options.outlier_threshold));
+  if (!(options.place_vote_rotation_degrees > 0.0 && options.place_vote_translation > 0.0 && options.place_vote_ratio >= 1.0 &&
+        std::isfinite(options.place_vote_rotation_degrees) && std::isfinite(options.place_vote_translation) &&
+        std::isfinite(options.place_vote_ratio)))
+    throw Error("options 'place_vote_rotation_degrees' and 'place_vote_translation' must be positive and 'place_vote_ratio' at least 1, got " +
+                std::to_string(options.place_vote_rotation_degrees) + ", " + std::to_string(options.place_vote_translation) + ", " +
+                std::to_string(options.place_vote_ratio));
   if (options.information_rounds > kMaximumInformationRounds)
     throw Error("option 'information_rounds' must be at most " + std::to_string(kMaximumInformationRounds) + ", got " +
                 std::to_string(options.information_rounds));

@@ -12,6 +12,7 @@
 #include <set>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <random>
@@ -792,6 +793,27 @@ TEST(PlaceDescriptor, FindsThePlaceUnderAnyHeadingAcrossDensityAndFieldOfView) {
   PointCloud empty;
   EXPECT_TRUE(std::isinf(place_distance(dense[0], place_descriptor(empty, up))));
   EXPECT_THROW(place_distance(dense[0], Eigen::VectorXd::Zero(40)), Error);
+}
+
+// Options out of range are errors naming the option, before any scan is read.
+TEST(MapOptionsCheck, OutOfRangeOptionsAreErrorsNamingTheOption) {
+  ScanList list;
+  list.source = "scans.tsv";
+  list.scans.push_back({"a", "missing.ply", "/nonexistent/missing.ply", 2, std::nullopt});
+  list.sessions = {"a"};
+  const auto message = [&](const std::function<void(MapOptions&)>& change) {
+    MapOptions options;
+    change(options);
+    return error_of([&] { map_scans(list, options); });
+  };
+  EXPECT_NE(message([](MapOptions& o) { o.outlier_threshold = -1.0; }).find("outlier_threshold"), std::string::npos);
+  EXPECT_NE(message([](MapOptions& o) { o.outlier_threshold = std::numeric_limits<double>::infinity(); }).find("outlier_threshold"),
+            std::string::npos);
+  EXPECT_NE(message([](MapOptions& o) { o.place_vote_ratio = 0.5; }).find("place_vote_ratio"), std::string::npos);
+  EXPECT_NE(message([](MapOptions& o) { o.place_vote_translation = 0.0; }).find("place_vote_translation"), std::string::npos);
+  EXPECT_NE(message([](MapOptions& o) { o.information_tolerance = 1.0; }).find("information_tolerance"), std::string::npos);
+  // In range: the options pass and the missing scan is what fails, named.
+  EXPECT_NE(message([](MapOptions&) {}).find("missing.ply"), std::string::npos);
 }
 
 // The odometry gate of loop edges within a session: a right edge a few tens of metres back passes;
