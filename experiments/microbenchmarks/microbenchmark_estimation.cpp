@@ -3,6 +3,8 @@
 // up-axis estimate of one simulated street scan per sensor, and all of `auto` on a KITTI scan.
 // Target: Ceres refinement of ~100 correspondences in <= 2 ms.
 #include "estimation/candidate_selection.h"
+#include "estimation/mapping.h"
+#include "estimation/pose_graph.h"
 #include "estimation/refiner.h"
 #include "estimation/registration_config.h"
 #include "experiments/synthetic/mesh_ray_caster.h"
@@ -161,6 +163,52 @@ void BM_GuessSensorPresetKitti(benchmark::State& state) {
   state.counters["points"] = static_cast<double>(cloud.size());
 }
 BENCHMARK(BM_GuessSensorPresetKitti)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+
+// The map's place recognition on simulated scans of street 1 (docs/mapping.md, step 4): the
+// descriptor of one scan, and one comparison under all 60 headings (an HDL-64E scan against a Livox
+// scan of the same place). Arg: 0 HDL-64E, 1 VLP-16, 2 Livox.
+void BM_PlaceDescriptor(benchmark::State& state) {
+  const char* sensors[] = {"hdl64", "vlp16", "livox"};
+  const quadrix::Scene street = make_street_scene(1);
+  const RayCaster caster(street);
+  const SimulatedScan scan =
+      simulate_scan(street, caster, sensor_preset(sensors[state.range(0)]), street.default_lidar_poses[0], 1, 0);
+  for (auto _ : state) benchmark::DoNotOptimize(place_descriptor(scan.cloud, Eigen::Vector3d::UnitZ()).data());
+  state.SetLabel(sensors[state.range(0)]);
+  state.counters["points"] = static_cast<double>(scan.cloud.size());
+}
+BENCHMARK(BM_PlaceDescriptor)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+
+void BM_PlaceDistance(benchmark::State& state) {
+  const quadrix::Scene street = make_street_scene(1);
+  const RayCaster caster(street);
+  const Eigen::VectorXd first = place_descriptor(
+      simulate_scan(street, caster, sensor_preset("hdl64"), street.default_lidar_poses[0], 1, 0).cloud, Eigen::Vector3d::UnitZ());
+  const Eigen::VectorXd second = place_descriptor(
+      simulate_scan(street, caster, sensor_preset("livox"), street.default_lidar_poses[0], 1, 0).cloud, Eigen::Vector3d::UnitZ());
+  double distance = 0.0;
+  for (auto _ : state) benchmark::DoNotOptimize(distance = place_distance(first, second));
+  state.counters["distance"] = distance;
+}
+BENCHMARK(BM_PlaceDistance);
+
+// The outlier statistics of a pose graph the size of a three-sensor town drive (docs/mapping.md,
+// step 8): a chain of N poses 8 m apart with a loop edge from each pose to the one two back, the
+// redundancy of every edge from one sparse factorisation and N six-column solves.
+void BM_EdgeOutlierStatistics(benchmark::State& state) {
+  const std::size_t count = static_cast<std::size_t>(state.range(0));
+  std::vector<Eigen::Isometry3d> poses(count, Eigen::Isometry3d::Identity());
+  for (std::size_t index = 0; index < count; ++index) poses[index].translation() = Eigen::Vector3d(8.0 * index, 0.0, 0.0);
+  std::vector<PoseGraphEdge> edges;
+  Information6d information = Information6d::Identity() * 100.0;
+  for (std::size_t index = 1; index < count; ++index) {
+    edges.push_back({index, index - 1, poses[index - 1].inverse() * poses[index], information, false, false});
+    if (index >= 2) edges.push_back({index, index - 2, poses[index - 2].inverse() * poses[index], information, true, false});
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(edge_outlier_statistics(poses, edges).data());
+  state.counters["edges"] = static_cast<double>(edges.size());
+}
+BENCHMARK(BM_EdgeOutlierStatistics)->Arg(453)->Arg(1000)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
