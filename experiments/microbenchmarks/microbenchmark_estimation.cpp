@@ -121,14 +121,18 @@ void BM_SelectAmong8Candidates(benchmark::State& state) {
 }
 BENCHMARK(BM_SelectAmong8Candidates)->Unit(benchmark::kMillisecond);
 
+// One level scan of street 1 by `sensor` (a sensor_preset name) from the street's first pose.
+SimulatedScan street_scan(const char* sensor) {
+  const quadrix::Scene street = make_street_scene(1);
+  const RayCaster caster(street);
+  return simulate_scan(street, caster, sensor_preset(sensor), street.default_lidar_poses[0], 1, 0);
+}
+
 // estimate_up_direction on one level scan of street 1: voxel-normal mode, then the fullest plane's
 // points (docs/registration.md, "How auto finds the up axis"). Arg: 0 HDL-64E, 1 VLP-16, 2 Livox.
 void BM_EstimateUpDirection(benchmark::State& state) {
   const char* sensors[] = {"hdl64", "vlp16", "livox"};
-  const quadrix::Scene street = make_street_scene(1);
-  const RayCaster caster(street);
-  const SimulatedScan scan =
-      simulate_scan(street, caster, sensor_preset(sensors[state.range(0)]), street.default_lidar_poses[0], 1, 0);
+  const SimulatedScan scan = street_scan(sensors[state.range(0)]);
   double tilt = 0.0;
   for (auto _ : state) {
     const UpDirectionEstimate estimate = estimate_up_direction(scan.cloud);
@@ -169,10 +173,7 @@ BENCHMARK(BM_GuessSensorPresetKitti)->DenseRange(0, 2)->Unit(benchmark::kMillise
 // scan of the same place). Arg: 0 HDL-64E, 1 VLP-16, 2 Livox.
 void BM_PlaceDescriptor(benchmark::State& state) {
   const char* sensors[] = {"hdl64", "vlp16", "livox"};
-  const quadrix::Scene street = make_street_scene(1);
-  const RayCaster caster(street);
-  const SimulatedScan scan =
-      simulate_scan(street, caster, sensor_preset(sensors[state.range(0)]), street.default_lidar_poses[0], 1, 0);
+  const SimulatedScan scan = street_scan(sensors[state.range(0)]);
   for (auto _ : state) benchmark::DoNotOptimize(place_descriptor(scan.cloud, Eigen::Vector3d::UnitZ()).data());
   state.SetLabel(sensors[state.range(0)]);
   state.counters["points"] = static_cast<double>(scan.cloud.size());
@@ -180,12 +181,8 @@ void BM_PlaceDescriptor(benchmark::State& state) {
 BENCHMARK(BM_PlaceDescriptor)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 
 void BM_PlaceDistance(benchmark::State& state) {
-  const quadrix::Scene street = make_street_scene(1);
-  const RayCaster caster(street);
-  const Eigen::VectorXd first = place_descriptor(
-      simulate_scan(street, caster, sensor_preset("hdl64"), street.default_lidar_poses[0], 1, 0).cloud, Eigen::Vector3d::UnitZ());
-  const Eigen::VectorXd second = place_descriptor(
-      simulate_scan(street, caster, sensor_preset("livox"), street.default_lidar_poses[0], 1, 0).cloud, Eigen::Vector3d::UnitZ());
+  const Eigen::VectorXd first = place_descriptor(street_scan("hdl64").cloud, Eigen::Vector3d::UnitZ());
+  const Eigen::VectorXd second = place_descriptor(street_scan("livox").cloud, Eigen::Vector3d::UnitZ());
   double distance = 0.0;
   for (auto _ : state) benchmark::DoNotOptimize(distance = place_distance(first, second));
   state.counters["distance"] = distance;
