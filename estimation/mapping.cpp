@@ -761,7 +761,6 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
     const bool ambiguous_allowed =
         edge.across_sessions ? options.use_ambiguous_edges_across_sessions : options.use_ambiguous_edges;
     edge.used = edge.status == "ok" || (ambiguous_allowed && edge.status == "ambiguous");
-    if (!edge.used && edge.note.empty()) edge.note = "not in the graph (" + edge.status + ")";
     std::string why;
     if (edge.used && !edge.across_sessions &&
         !consistent_with_odometry(edge.transform, result.odometry[edge.to].inverse() * result.odometry[edge.from],
@@ -770,6 +769,11 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       edge.note = "not in the graph: " + why;
     }
   }
+  // The later session's odometry frame in the earlier one's, as a loop edge between two sessions measures it.
+  const auto later_session_frame = [&](const MapEdge& edge) {
+    const Eigen::Isometry3d frame = result.odometry[edge.to] * edge.transform * result.odometry[edge.from].inverse();
+    return session_of[edge.from] > session_of[edge.to] ? frame : frame.inverse();
+  };
   // Ambiguous place edges between two sessions enter by a clear vote: each place edge (ok or
   // ambiguous) measures the later session's odometry frame in the earlier one's; the pose most
   // edges agree on (within place_vote_*) wins when enough agree and no pose beyond the consensus
@@ -784,13 +788,8 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
         place_edges[std::minmax(session_of[edge.from], session_of[edge.to])].push_back(index);
     }
     for (const auto& [session_pair, members] : place_edges) {
-      // The later session's odometry frame in the earlier one's, as each edge measures it.
       std::vector<Eigen::Isometry3d> frames;
-      for (const std::size_t index : members) {
-        const MapEdge& edge = loop_edges[index];
-        const Eigen::Isometry3d frame = result.odometry[edge.to] * edge.transform * result.odometry[edge.from].inverse();
-        frames.push_back(session_of[edge.from] > session_of[edge.to] ? frame : frame.inverse());
-      }
+      for (const std::size_t index : members) frames.push_back(later_session_frame(loop_edges[index]));
       const auto within = [](const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double degrees, double metres) {
         const PoseDeparture departure = departure_between(a, b);
         return departure.degrees <= degrees && departure.metres <= metres;
@@ -815,7 +814,7 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
         char why[160];
         std::snprintf(why, sizeof why, "in the graph by the place vote: %zu of the %zu place edges between these sessions agree (the largest contradicting vote %zu)",
                       support[best], members.size(), rival);
-        edge.note = why + (edge.note.rfind("not in the graph", 0) == 0 ? std::string() : "; " + edge.note);
+        edge.note = why + (edge.note.empty() ? std::string() : "; " + edge.note);
       }
     }
   }
@@ -831,13 +830,10 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
   }
   for (const auto& [session_pair, members] : across_pairs) {
     if (members.size() < 2) continue;
-    // Frame of the `from` scan's session in the `to` scan's session's odometry frame, as edge k measures it.
-    const auto frame_of = [&](const MapEdge& edge) {
-      return result.odometry[edge.to] * edge.transform * result.odometry[edge.from].inverse();
-    };
     const auto predicts = [&](const MapEdge& by, const MapEdge& other, PoseDeparture& departure) {
-      Eigen::Isometry3d frame = frame_of(by);  // `by`'s from-session into its to-session
-      if (session_of[by.from] != session_of[other.from]) frame = frame.inverse();
+      // `by`'s frame of `other`'s from-session in its to-session.
+      Eigen::Isometry3d frame = later_session_frame(by);
+      if (session_of[other.from] < session_of[other.to]) frame = frame.inverse();
       departure = departure_between(other.transform, result.odometry[other.to].inverse() * frame * result.odometry[other.from]);
       return departure.degrees <= options.place_consensus_rotation_degrees && departure.metres <= options.place_consensus_translation;
     };
@@ -863,6 +859,8 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
       edge.note = why + (edge.note.empty() ? std::string() : "; " + edge.note);
     }
   }
+  for (MapEdge& edge : loop_edges)
+    if (!edge.used && edge.note.empty()) edge.note = "not in the graph (" + edge.status + ")";
   result.edges = odometry_edges;
   result.edges.insert(result.edges.end(), loop_edges.begin(), loop_edges.end());
 
@@ -1125,6 +1123,7 @@ MapResult map_scans(const ScanList& input, const MapOptions& options, const MapP
         result.outlier_edges = snooping.removed.size();
         result.outlier_test_exhausted = snooping.exhausted;
         if (!snooping.removed.empty()) {
+          result.poses = std::move(snooped_poses);  // solved without the removed edges already
           solve_graph();
           calibrate();
         }
